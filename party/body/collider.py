@@ -1,0 +1,108 @@
+"""A collider: a validated triangle mesh with per-vertex normals (section 6: "triangle
+patches with normals"). Positions in metres."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+from ..errors import InvalidInput
+
+
+@dataclass(frozen=True)
+class ColliderMesh:
+    """A body or prop, checked on construction.
+
+    Attributes:
+        name: Label used in messages.
+        vertices: Vertex positions [m], shape (n, 3), float.
+        faces: Triangles, counter-clockwise seen from outside, shape (t, 3), int.
+        velocity: Constant linear velocity of the whole mesh [m/s], shape (3,); the surface
+            velocity enters the response of eq. (12). Moving meshes may also be driven per
+            step through the State.
+    """
+
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.vertices, dtype=float)
+        f = np.asarray(self.faces)
+        object.__setattr__(self, "vertices", v)
+        object.__setattr__(self, "velocity", np.asarray(self.velocity, dtype=float).reshape(3))
+        if v.ndim != 2 or v.shape[1] != 3 or len(v) == 0 or f.size == 0:
+            raise InvalidInput(f"collider {self.name!r} is empty (needs vertices and triangles)")
+        if f.ndim != 2 or f.shape[1] != 3 or not np.issubdtype(f.dtype, np.integer):
+            raise InvalidInput(f"collider {self.name!r}: faces must be an integer array of shape (t, 3)")
+        object.__setattr__(self, "faces", f.astype(np.int32))
+        if not np.all(np.isfinite(v)):
+            raise InvalidInput(f"collider {self.name!r} has non-finite vertex positions")
+        if f.min() < 0 or f.max() >= len(v):
+            raise InvalidInput(f"collider {self.name!r} has a face index out of range [0, {len(v)})")
+        self._check_manifold()
+
+    def _check_manifold(self) -> None:
+        f = self.faces
+        if np.any((f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])):
+            raise InvalidInput(f"collider {self.name!r} has degenerate triangles (repeated vertex)")
+        area2 = np.linalg.norm(self.face_normals_unnormalized(), axis=1)
+        if np.any(area2 <= 1e-14):
+            raise InvalidInput(f"collider {self.name!r} has zero-area triangles")
+        directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+        undirected = np.sort(directed, axis=1)
+        _, counts = np.unique(undirected, axis=0, return_counts=True)
+        if np.any(counts > 2):
+            raise InvalidInput(
+                f"collider {self.name!r} is non-manifold: {int(np.sum(counts > 2))} edges are shared by more than two triangles")
+        _, dcounts = np.unique(directed, axis=0, return_counts=True)
+        if np.any(dcounts > 1):
+            raise InvalidInput(f"collider {self.name!r} has inconsistently oriented triangles (normals not coherent)")
+        if np.all(counts == 2) and self.signed_volume() < 0.0:
+            raise InvalidInput(f"collider {self.name!r} has inward-facing normals (negative enclosed volume)")
+
+    def face_normals_unnormalized(self) -> np.ndarray:
+        p = self.vertices[self.faces]
+        return np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+
+    def signed_volume(self) -> float:
+        p = self.vertices[self.faces]
+        return float(np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0)
+
+    def vertex_normals(self) -> np.ndarray:
+        """Angle-weighted vertex normals (Thuermer and Wuethrich 1998), unit, shape (n, 3):
+        independent of how a flat face is split into triangles."""
+        p = self.vertices[self.faces]
+        fn = self.face_normals_unnormalized()
+        fn /= np.linalg.norm(fn, axis=1, keepdims=True)
+        vn = np.zeros_like(self.vertices)
+        for corner in range(3):
+            e1 = p[:, (corner + 1) % 3] - p[:, corner]
+            e2 = p[:, (corner + 2) % 3] - p[:, corner]
+            cos = np.einsum("ij,ij->i", e1, e2) / (np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1))
+            np.add.at(vn, self.faces[:, corner], fn * np.arccos(np.clip(cos, -1, 1))[:, None])
+        return vn / np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-30)
+
+    def corner_normals(self, crease_degrees: float = 30.0) -> np.ndarray:
+        """Normals at each face corner, shape (t, 3, 3): the smooth vertex normal where it is
+        within ``crease_degrees`` of the face normal, else the face normal (sharp edges of a
+        box or a table stay sharp, a sphere or a body stays smooth)."""
+        fn = self.face_normals_unnormalized()
+        fn /= np.linalg.norm(fn, axis=1, keepdims=True)
+        corner = self.vertex_normals()[self.faces]
+        smooth = np.einsum("tkc,tc->tk", corner, fn) >= np.cos(np.radians(crease_degrees))
+        return np.where(smooth[:, :, None], corner, fn[:, None, :])
+
+    def translated(self, offset) -> "ColliderMesh":
+        return ColliderMesh(self.name, self.vertices + np.asarray(offset, float), self.faces, self.velocity)
+
+    def to_trimesh(self) -> trimesh.Trimesh:
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+
+def collider_from_trimesh(mesh: trimesh.Trimesh, name: str, velocity=(0.0, 0.0, 0.0)) -> ColliderMesh:
+    """Wrap a trimesh mesh (already in metres) as a collider, validating it."""
+    return ColliderMesh(name, np.asarray(mesh.vertices), np.asarray(mesh.faces), np.asarray(velocity, float))

@@ -1,0 +1,142 @@
+"""Cloth against body: detection along the step (section 6.1, condition (6)) and the
+response of eqs. (8)-(12)."""
+
+import warp as wp
+
+from .geometry import boxes_overlap, closest_point_barycentric, friction_restitution_response, interpolate
+from .intervals import IntervalLists, first_visit, query_axis
+
+EDGE_TOLERANCE = 0.25
+"""A node whose projection falls outside a triangle by up to this fraction of the thickness
+still counts as over it, so that no node slips between two adjacent triangles."""
+
+MAX_FACES = 24
+"""Body triangles remembered per node between interval-list queries."""
+
+
+@wp.kernel
+def gather_body_faces(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    thickness: wp.array(dtype=float),
+    lists: IntervalLists,
+    dt: float,
+    margin: float,
+    faces_out: wp.array(dtype=int, ndim=2),
+    face_count: wp.array(dtype=int),
+    overflow: wp.array(dtype=int),
+):
+    """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
+    lets the answer serve the next steps, walked on the axis with n = min(n_x, n_y, n_z) list
+    entries and box-checked in 3-D. The triangles found are kept for the narrow phase."""
+    i = wp.tid()
+    face_count[i] = 0
+    if inv_mass[i] == 0.0:
+        return
+    x0 = x[i]
+    x1 = x0 + v[i] * dt
+    pad = wp.vec3(thickness[i] + margin)
+    lo = wp.min(x0, x1) - pad
+    hi = wp.max(x0, x1) + pad
+    sel = query_axis(lists, lo, hi)
+    axis = sel[0]
+    base = axis * (lists.max_cells + 1)
+    count = int(0)
+    for c in range(sel[1], sel[2] + 1):
+        for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
+            f = lists.ids[j]
+            if not first_visit(lists, f, axis, sel[1], c):
+                continue
+            if not boxes_overlap(lo, hi, lists.item_lo[f], lists.item_hi[f]):
+                continue
+            if count < MAX_FACES:
+                faces_out[i, count] = f
+                count += 1
+            else:
+                wp.atomic_add(overflow, 0, 1)
+    face_count[i] = count
+
+
+@wp.kernel
+def collide_body(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    thickness: wp.array(dtype=float),
+    friction: wp.array(dtype=float),
+    restitution: wp.array(dtype=float),
+    body_q: wp.array(dtype=wp.vec3),
+    body_qd: wp.array(dtype=wp.vec3),
+    body_normals: wp.array(dtype=wp.vec3, ndim=2),
+    faces: wp.array(dtype=int, ndim=2),
+    candidates: wp.array(dtype=int, ndim=2),
+    candidate_count: wp.array(dtype=int),
+    dt: float,
+    contacts: wp.array(dtype=int),
+):
+    """One detection-and-response pass for each free node over its candidate triangles.
+
+    The node moves from r to r + (v - v_body) dt relative to each triangle. It collides when
+    that step brings it within the thickness eps of the triangle's plane over the triangle (or
+    it already rests within eps, or has been pushed up to eps inside): condition (6). The
+    earliest such contact wins; its point p gives the body normal n (interpolated corner
+    normals, smooth except across creases) and the body velocity at p. Eqs. (8)-(12) give the new velocity; if the step would
+    still end closer than eps to the triangle, the node's start is moved out along the face
+    normal so that the step ends at eps (a position correction, adding no velocity).
+    """
+    i = wp.tid()
+    if inv_mass[i] == 0.0:
+        return
+    x0 = x[i]
+    vi = v[i]
+    eps = thickness[i]
+    best_t = float(2.0)
+    best_s1 = float(1.0e30)
+    best_face = int(-1)
+    best_w = wp.vec3(0.0)
+    for j in range(candidate_count[i]):
+        f = candidates[i, j]
+        a = body_q[faces[f, 0]]
+        b = body_q[faces[f, 1]]
+        cc = body_q[faces[f, 2]]
+        nf = wp.normalize(wp.cross(b - a, cc - a))
+        vb = (body_qd[faces[f, 0]] + body_qd[faces[f, 1]] + body_qd[faces[f, 2]]) / 3.0
+        dr = (vi - vb) * dt
+        s0 = wp.dot(x0 - a, nf)
+        s1 = s0 + wp.dot(dr, nf)
+        if s0 < -eps or s1 >= eps:
+            continue
+        t = float(0.0)
+        if s0 > eps:
+            t = (s0 - eps) / (s0 - s1)
+        xt = x0 + dr * t
+        w = closest_point_barycentric(xt, a, b, cc)
+        offset = xt - interpolate(w, a, b, cc)
+        lateral = offset - wp.dot(offset, nf) * nf
+        if wp.length(lateral) > EDGE_TOLERANCE * eps:
+            continue
+        if t < best_t or (t == best_t and s1 < best_s1):
+            best_t = t
+            best_s1 = s1
+            best_face = f
+            best_w = w
+    if best_face < 0:
+        return
+
+    fa = faces[best_face, 0]
+    fb = faces[best_face, 1]
+    fc = faces[best_face, 2]
+    a = body_q[fa]
+    nf = wp.normalize(wp.cross(body_q[fb] - a, body_q[fc] - a))
+    n = wp.normalize(interpolate(best_w, body_normals[best_face, 0], body_normals[best_face, 1],
+                                 body_normals[best_face, 2]))
+    if wp.dot(n, nf) <= 0.0:
+        n = nf
+    vbody = interpolate(best_w, body_qd[fa], body_qd[fb], body_qd[fc])
+    vnew = friction_restitution_response(vi - vbody, n, friction[i], restitution[i]) + vbody
+    s_end = wp.dot(x0 - a, nf) + wp.dot(vnew - vbody, nf) * dt
+    if s_end < eps:
+        x[i] = x0 + (eps - s_end) * nf
+    v[i] = vnew
+    contacts[i] = 1

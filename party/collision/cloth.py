@@ -1,0 +1,265 @@
+"""Cloth against cloth (section 6.3): node-versus-triangle detection with the interval lists,
+and the gamma/kappa momentum exchange of eqs. (13)-(14), distributed to the triangle's nodes by
+barycentric weights."""
+
+import warp as wp
+
+from .geometry import boxes_overlap, closest_point_barycentric, interpolate
+from .intervals import IntervalLists, first_visit, query_axis
+
+MAX_CONTACTS = 4
+"""Cloth-cloth contacts kept per node (the nearest ones)."""
+
+
+@wp.func
+def is_neighbor(i: int, n: int, offsets: wp.array(dtype=int), neighbors: wp.array(dtype=int)) -> bool:
+    if i == n:
+        return True
+    for j in range(offsets[i], offsets[i + 1]):
+        if neighbors[j] == n:
+            return True
+    return False
+
+
+MAX_CANDIDATES = 48
+"""Cloth triangles remembered per node between interval-list queries."""
+
+
+@wp.kernel
+def gather_cloth_triangles(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    thickness: wp.array(dtype=float),
+    tris: wp.array(dtype=int, ndim=2),
+    nbr_offsets: wp.array(dtype=int),
+    nbrs: wp.array(dtype=int),
+    lists: IntervalLists,
+    dt: float,
+    margin: float,
+    out: wp.array(dtype=int, ndim=2),
+    out_count: wp.array(dtype=int),
+    out_distance: wp.array(dtype=float, ndim=2),
+    overflow: wp.array(dtype=int),
+):
+    """The interval-list search of section 6.1 against the cloth's own triangles: the box
+    spanned by r and r + dr grown by eps and a margin, walked on the axis with the fewest
+    entries. Triangles holding the node or one of its mesh neighbours are left out (section
+    6.3); the nearest MAX_CANDIDATES others are kept for the following steps (the count of
+    farther ones dropped goes to ``overflow``)."""
+    i = wp.tid()
+    x0 = x[i]
+    x1 = x0 + v[i] * dt
+    pad = wp.vec3(thickness[i] + margin)
+    lo = wp.min(x0, x1) - pad
+    hi = wp.max(x0, x1) + pad
+    sel = query_axis(lists, lo, hi)
+    axis = sel[0]
+    base = axis * (lists.max_cells + 1)
+    count = int(0)
+    for c in range(sel[1], sel[2] + 1):
+        for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
+            t = lists.ids[j]
+            if not first_visit(lists, t, axis, sel[1], c):
+                continue
+            if not boxes_overlap(lo, hi, lists.item_lo[t], lists.item_hi[t]):
+                continue
+            ta = tris[t, 0]
+            tb = tris[t, 1]
+            tc = tris[t, 2]
+            if is_neighbor(i, ta, nbr_offsets, nbrs) or is_neighbor(i, tb, nbr_offsets, nbrs) or is_neighbor(i, tc, nbr_offsets, nbrs):
+                continue
+            w = closest_point_barycentric(x0, x[ta], x[tb], x[tc])
+            dist = wp.length(x0 - interpolate(w, x[ta], x[tb], x[tc]))
+            slot = count
+            if count < MAX_CANDIDATES:
+                count += 1
+            else:
+                wp.atomic_add(overflow, 0, 1)
+                slot = int(-1)
+                worst = dist
+                for s in range(MAX_CANDIDATES):
+                    if out_distance[i, s] > worst:
+                        worst = out_distance[i, s]
+                        slot = s
+            if slot >= 0:
+                out[i, slot] = t
+                out_distance[i, slot] = dist
+    out_count[i] = count
+
+
+@wp.kernel
+def detect_cloth(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    thickness: wp.array(dtype=float),
+    tris: wp.array(dtype=int, ndim=2),
+    candidates: wp.array(dtype=int, ndim=2),
+    candidate_count: wp.array(dtype=int),
+    dt: float,
+    contact_tri: wp.array(dtype=int, ndim=2),
+    contact_w: wp.array(dtype=wp.vec3, ndim=2),
+    contact_n: wp.array(dtype=wp.vec3, ndim=2),
+    contact_d: wp.array(dtype=float, ndim=2),
+    contact_count: wp.array(dtype=int),
+):
+    """Find the cloth triangles a node comes within eps of during this step.
+
+    For each candidate the closest point q (barycentric w) gives the distance d and the side n
+    the node is on at the start of the step; the pair is a contact when the predicted gap
+    d + ((v_i - v_q) . n) dt is below eps. The nearest MAX_CONTACTS are kept.
+    """
+    i = wp.tid()
+    x0 = x[i]
+    vi = v[i]
+    eps = thickness[i]
+    count = int(0)
+    for j in range(candidate_count[i]):
+        t = candidates[i, j]
+        ta = tris[t, 0]
+        tb = tris[t, 1]
+        tc = tris[t, 2]
+        a = x[ta]
+        b = x[tb]
+        cc = x[tc]
+        w = closest_point_barycentric(x0, a, b, cc)
+        gap = x0 - interpolate(w, a, b, cc)
+        d = wp.length(gap)
+        nf = wp.cross(b - a, cc - a)
+        nf_len = wp.length(nf)
+        if nf_len < 1.0e-20:
+            continue
+        nf = nf / nf_len
+        n = nf
+        if d > 1.0e-7:
+            n = gap / d
+        elif wp.dot(vi, nf) > 0.0:
+            n = -nf
+        vq = interpolate(w, v[ta], v[tb], v[tc])
+        predicted = d + wp.dot(vi - vq, n) * dt
+        if predicted >= eps and d >= eps:
+            continue
+        slot = count
+        if count >= MAX_CONTACTS:
+            slot = int(-1)
+            worst = d
+            for s in range(MAX_CONTACTS):
+                if contact_d[i, s] > worst:
+                    worst = contact_d[i, s]
+                    slot = s
+        else:
+            count += 1
+        if slot >= 0:
+            contact_tri[i, slot] = t
+            contact_w[i, slot] = w
+            contact_n[i, slot] = n
+            contact_d[i, slot] = d
+    contact_count[i] = count
+
+
+@wp.func
+def exchange(v0: wp.vec3, v1: wp.vec3, gamma: float, kappa: float) -> wp.vec3:
+    """Eq. (13) in the rest frame of the struck point: v0' - v1 = kappa gamma (v0 - v1)."""
+    return v1 + kappa * gamma * (v0 - v1)
+
+
+@wp.kernel
+def respond_cloth(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    thickness: wp.array(dtype=float),
+    gamma: wp.array(dtype=float),
+    kappa: wp.array(dtype=float),
+    tris: wp.array(dtype=int, ndim=2),
+    contact_tri: wp.array(dtype=int, ndim=2),
+    contact_w: wp.array(dtype=wp.vec3, ndim=2),
+    contact_n: wp.array(dtype=wp.vec3, ndim=2),
+    contact_count: wp.array(dtype=int),
+    dt: float,
+    dv: wp.array(dtype=wp.vec3),
+    dx: wp.array(dtype=wp.vec3),
+    hits: wp.array(dtype=int),
+):
+    """Eqs. (13)-(14) for every contact still closing, accumulated Jacobi-style.
+
+    Node 0 is the colliding node, node 1 the point w of the struck triangle. In the rest frame
+    of node 1 (the paper's setting, node 1 at rest): v0' = kappa gamma v0 and
+    v1' = kappa (1 - gamma) v0, i.e. v1' = v1 + kappa (1 - gamma)(v0 - v1). A change of node 1's
+    velocity is spread over the triangle's nodes as w_j / sum(w^2), which gives node 1 exactly
+    that change. If the pair would still close the gap after the exchange (gamma > 1/2), the
+    remaining normal approach is removed, split by inverse mass; a gap already under eps is
+    reopened by a position correction. The gap is measured anew each pass along the normal
+    found at detection (the side the node was on at the start of the step).
+    """
+    i, s = wp.tid()
+    if s >= contact_count[i]:
+        return
+    t = contact_tri[i, s]
+    w = contact_w[i, s]
+    n = contact_n[i, s]
+    eps = thickness[i]
+    ta = tris[t, 0]
+    tb = tris[t, 1]
+    tc = tris[t, 2]
+    d = wp.dot(x[i] - interpolate(w, x[ta], x[tb], x[tc]), n)
+    v0 = v[i]
+    v1 = interpolate(w, v[ta], v[tb], v[tc])
+    un = wp.dot(v0 - v1, n)
+    closing = d + un * dt < eps
+    if not closing and d >= eps:
+        return
+    im0 = inv_mass[i]
+    im1 = w[0] * w[0] * inv_mass[ta] + w[1] * w[1] * inv_mass[tb] + w[2] * w[2] * inv_mass[tc]
+    if im0 + im1 == 0.0:
+        return
+    w2 = wp.dot(w, w)
+    d0 = wp.vec3(0.0)
+    d1 = wp.vec3(0.0)
+    if closing and un < 0.0:
+        if im0 > 0.0 and im1 > 0.0:
+            v0n = exchange(v0, v1, gamma[i], kappa[i])
+            v1n = v1 + kappa[i] * (1.0 - gamma[i]) * (v0 - v1)
+            d0 = v0n - v0
+            d1 = v1n - v1
+        rest = wp.dot((v0 + d0) - (v1 + d1), n)
+        if rest < 0.0:
+            lam = -rest / (im0 + im1)
+            d0 = d0 + lam * im0 * n
+            d1 = d1 - lam * im1 * n
+    p0 = wp.vec3(0.0)
+    p1 = wp.vec3(0.0)
+    if d < eps:
+        depth = eps - d
+        p0 = depth * im0 / (im0 + im1) * n
+        p1 = -depth * im1 / (im0 + im1) * n
+    if im0 > 0.0:
+        wp.atomic_add(dv, i, d0)
+        wp.atomic_add(dx, i, p0)
+        wp.atomic_add(hits, i, 1)
+    for k in range(3):
+        node = tris[t, k]
+        if inv_mass[node] > 0.0 and w[k] > 0.0:
+            share = w[k] / w2
+            wp.atomic_add(dv, node, share * d1)
+            wp.atomic_add(dx, node, share * p1)
+            wp.atomic_add(hits, node, 1)
+
+
+@wp.kernel
+def apply_cloth_response(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    dv: wp.array(dtype=wp.vec3),
+    dx: wp.array(dtype=wp.vec3),
+    hits: wp.array(dtype=int),
+):
+    """Average each node's accumulated corrections over its contacts, apply, and reset."""
+    i = wp.tid()
+    h = hits[i]
+    if h > 0:
+        scale = 1.0 / float(h)
+        v[i] = v[i] + dv[i] * scale
+        x[i] = x[i] + dx[i] * scale
+        dv[i] = wp.vec3(0.0)
+        dx[i] = wp.vec3(0.0)
+        hits[i] = 0

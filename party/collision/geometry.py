@@ -1,0 +1,76 @@
+"""Stateless geometric primitives used by detection and response (Warp functions)."""
+
+import warp as wp
+
+
+@wp.func
+def closest_point_barycentric(p: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> wp.vec3:
+    """Barycentric weights (wa, wb, wc) of the point of triangle abc closest to p
+    (Ericson, Real-Time Collision Detection, 5.1.5)."""
+    ab = b - a
+    ac = c - a
+    ap = p - a
+    d1 = wp.dot(ab, ap)
+    d2 = wp.dot(ac, ap)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return wp.vec3(1.0, 0.0, 0.0)
+    bp = p - b
+    d3 = wp.dot(ab, bp)
+    d4 = wp.dot(ac, bp)
+    if d3 >= 0.0 and d4 <= d3:
+        return wp.vec3(0.0, 1.0, 0.0)
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        t = d1 / (d1 - d3)
+        return wp.vec3(1.0 - t, t, 0.0)
+    cp = p - c
+    d5 = wp.dot(ab, cp)
+    d6 = wp.dot(ac, cp)
+    if d6 >= 0.0 and d5 <= d6:
+        return wp.vec3(0.0, 0.0, 1.0)
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        t = d2 / (d2 - d6)
+        return wp.vec3(1.0 - t, 0.0, t)
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return wp.vec3(0.0, 1.0 - t, t)
+    denom = 1.0 / (va + vb + vc)
+    v = vb * denom
+    w = vc * denom
+    return wp.vec3(1.0 - v - w, v, w)
+
+
+@wp.func
+def interpolate(w: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> wp.vec3:
+    return w[0] * a + w[1] * b + w[2] * c
+
+
+@wp.func
+def boxes_overlap(lo0: wp.vec3, hi0: wp.vec3, lo1: wp.vec3, hi1: wp.vec3) -> bool:
+    return (lo0[0] <= hi1[0] and lo1[0] <= hi0[0] and lo0[1] <= hi1[1] and lo1[1] <= hi0[1]
+            and lo0[2] <= hi1[2] and lo1[2] <= hi0[2])
+
+
+@wp.func
+def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: float) -> wp.vec3:
+    """Eqs. (8)-(11): the new relative velocity of a node striking a body.
+
+    ``vr`` is the node's velocity relative to the body point, ``n`` the body normal there.
+    Split vr into normal and tangential parts; inside the friction cone (|v_t| < mu |v_n|) the
+    tangential part stops, outside it shrinks by mu |v_n|; the normal part reverses, scaled by
+    the restitution sigma. Only approaching velocities (v . n < 0) change.
+    """
+    un = wp.dot(vr, n)
+    if un >= 0.0:
+        return vr
+    vn = un * n
+    vt = vr - vn
+    speed_t = wp.length(vt)
+    limit = mu * (-un)
+    if speed_t <= limit:
+        vt = wp.vec3(0.0)
+    else:
+        vt = vt * ((speed_t - limit) / speed_t)
+    return vt - sigma * vn

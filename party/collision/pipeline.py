@@ -1,0 +1,149 @@
+"""The Collision() of eq. (5): body and cloth responses chained through layers (figure 10)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+from ..model import Model, State
+from .body import MAX_FACES, collide_body, gather_body_faces
+from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
+                    respond_cloth)
+from .intervals import AxisIntervalLists, moved_beyond
+
+
+@dataclass(frozen=True)
+class CollisionSettings:
+    """How collisions are handled.
+
+    Attributes:
+        body: Cloth-body collision on.
+        cloth: Cloth-cloth collision on (section 6.3).
+        passes: Alternations of cloth-cloth and cloth-body response per step. The paper keeps
+            each action on a stack and answers it with the reaction once the innermost layer
+            meets the body (figure 10); in parallel, each pass carries actions one layer
+            further in and reactions one layer further out, so ``passes`` at least the number
+            of stacked layers plus one resolves a stack. The last response of a step is always
+            against the body, so no node ends a step inside it.
+        search_margin: Extra reach of the interval-list search [m]. The triangles found are
+            remembered and the search is repeated only once some node has moved half this
+            far, so a larger margin means fewer searches but more candidates.
+        max_cells: Largest number of intervals per axis in the interval lists.
+    """
+
+    body: bool = True
+    cloth: bool = True
+    passes: int = 3
+    search_margin: float = 4.0e-3
+    max_cells: int = 256
+
+
+class CollisionPipeline:
+    """Filters a step's velocities (and start positions) so that no node enters a body or
+    crosses a cloth layer: ``v(t+dt) = Collision(v*)`` of eq. (5)."""
+
+    def __init__(self, model: Model, settings: CollisionSettings = CollisionSettings()) -> None:
+        self.model = model
+        self.settings = settings
+        dev = model.device
+        n = model.node_count
+        self.has_body = settings.body and len(model.collider_faces) > 0
+        self.has_cloth = settings.cloth and model.triangle_count > 0
+        self.body_moving = bool(np.any(model.collider_velocity != 0.0))
+        self.margin = float(settings.search_margin)
+        self.contacts = wp.zeros(n, dtype=int, device=dev)
+        self.searches = 0
+        self._flag = wp.ones(1, dtype=int, device=dev)
+        self._overflow = wp.zeros(1, dtype=int, device=dev)
+        self._x_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._thickness = float(model.node_thickness.numpy().max())
+        if self.has_body:
+            colliders = model.host["colliders"]
+            size = max(_triangle_size(c.vertices, c.faces) for c in colliders)
+            self.body_lists = AxisIntervalLists(model.collider_faces, min_cell=size, max_cells=settings.max_cells)
+            self.body_faces = wp.zeros((n, MAX_FACES), dtype=int, device=dev)
+            self.body_face_count = wp.zeros(n, dtype=int, device=dev)
+            self._body_built = False
+        if self.has_cloth:
+            size = _triangle_size(model.host["points"], model.triangles)
+            self.cloth_lists = AxisIntervalLists(model.triangle_nodes, min_cell=size, max_cells=settings.max_cells)
+            self.cloth_candidates = wp.zeros((n, MAX_CANDIDATES), dtype=int, device=dev)
+            self.cloth_candidate_count = wp.zeros(n, dtype=int, device=dev)
+            self._candidate_distance = wp.zeros((n, MAX_CANDIDATES), dtype=float, device=dev)
+            self.contact_tri = wp.zeros((n, MAX_CONTACTS), dtype=int, device=dev)
+            self.contact_w = wp.zeros((n, MAX_CONTACTS), dtype=wp.vec3, device=dev)
+            self.contact_n = wp.zeros((n, MAX_CONTACTS), dtype=wp.vec3, device=dev)
+            self.contact_d = wp.zeros((n, MAX_CONTACTS), dtype=float, device=dev)
+            self.contact_count = wp.zeros(n, dtype=int, device=dev)
+            self.dv = wp.zeros(n, dtype=wp.vec3, device=dev)
+            self.dx = wp.zeros(n, dtype=wp.vec3, device=dev)
+            self.hits = wp.zeros(n, dtype=int, device=dev)
+
+    def apply(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
+        """Collision(): modify velocities ``v`` (and start positions ``x``) in place.
+
+        Repeats the interval-list search when a node may have left the region searched last
+        time (this reads one flag from the device)."""
+        m = self.model
+        dev = m.device
+        if self.has_body or self.has_cloth:
+            wp.launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag], device=dev)
+            if self.body_moving or int(self._flag.numpy()[0]):
+                self._search(x, v, state, dt)
+        if self.has_cloth:
+            wp.launch(detect_cloth, dim=m.node_count,
+                      inputs=[x, v, m.node_thickness, m.triangle_nodes, self.cloth_candidates,
+                              self.cloth_candidate_count, dt, self.contact_tri, self.contact_w, self.contact_n,
+                              self.contact_d, self.contact_count], device=dev)
+        for _ in range(max(self.settings.passes, 1)):
+            if self.has_cloth:
+                wp.launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
+                          inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_gamma, m.node_kappa,
+                                  m.triangle_nodes, self.contact_tri, self.contact_w, self.contact_n,
+                                  self.contact_count, dt, self.dv, self.dx, self.hits], device=dev)
+                wp.launch(apply_cloth_response, dim=m.node_count, inputs=[x, v, self.dv, self.dx, self.hits], device=dev)
+            if self.has_body:
+                wp.launch(collide_body, dim=m.node_count,
+                          inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution,
+                                  state.collider_q, state.collider_qd, m.collider_normals, m.collider_faces,
+                                  self.body_faces, self.body_face_count, dt, self.contacts], device=dev)
+            if not self.has_cloth:
+                break
+
+    def _search(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
+        m = self.model
+        dev = m.device
+        self.searches += 1
+        # A node stays within margin/2 of where it was searched from (else a new search), and
+        # so does every cloth triangle's node: node boxes grow by eps + margin/2 and cloth
+        # triangle boxes by margin/2; static body triangles do not move at all.
+        half = 0.5 * self.margin
+        if self.has_body:
+            if self.body_moving or not self._body_built:
+                self.body_lists.build_checked(state.collider_q, state.collider_qd, dt, 0.0)
+                self._body_built = True
+            wp.launch(gather_body_faces, dim=m.node_count,
+                      inputs=[x, v, m.node_inv_mass, m.node_thickness, self.body_lists.lists, dt, half,
+                              self.body_faces, self.body_face_count, self._overflow], device=dev)
+        if self.has_cloth:
+            self.cloth_lists.build_checked(x, v, dt, half)
+            wp.launch(gather_cloth_triangles, dim=m.node_count,
+                      inputs=[x, v, m.node_thickness, m.triangle_nodes, m.node_neighbor_offsets, m.node_neighbors,
+                              self.cloth_lists.lists, dt, half, self.cloth_candidates,
+                              self.cloth_candidate_count, self._candidate_distance, self._overflow], device=dev)
+        wp.copy(self._x_ref, x)
+        self._flag.zero_()
+
+    def candidate_overflow(self) -> int:
+        """How many candidate triangles were dropped because a node had too many (host sync)."""
+        return int(self._overflow.numpy()[0])
+
+
+def _triangle_size(points: np.ndarray, faces: np.ndarray) -> float:
+    """Largest axis-aligned extent of any triangle [m]."""
+    if len(faces) == 0:
+        return 1.0e-3
+    p = points[faces]
+    return float(max((p.max(axis=1) - p.min(axis=1)).max(), 1.0e-4))

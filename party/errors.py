@@ -1,0 +1,18 @@
+"""Errors a user can act on.
+
+Every problem with the user's input or with a run raises a subclass of :class:`PartyError`
+whose message is one line naming the thing at fault. The CLI prints that line and exits
+non-zero; library users catch ``PartyError``.
+"""
+
+
+class PartyError(ValueError):
+    """Base class: a one-line, user-facing problem."""
+
+
+class InvalidInput(PartyError):
+    """A parameter, mesh or file the user gave is unusable (names which and why)."""
+
+
+class SimulationUnstable(PartyError):
+    """The integration blew up (non-finite or runaway velocities)."""

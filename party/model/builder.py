@@ -1,0 +1,267 @@
+"""Assembling a :class:`Model` from cloth nets, fabrics, pins and colliders."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+from .. import device as devices
+from ..body.collider import ColliderMesh
+from ..errors import InvalidInput
+from ..fabric import Fabric
+from ..meshing.net import ClothNet, ElementKind
+from ..units import GRAVITY
+from .model import Model
+
+
+@dataclass(frozen=True)
+class ClothRange:
+    """Where one cloth's nodes and triangles sit in the model's arrays."""
+
+    name: str
+    node_start: int
+    node_end: int
+    triangle_start: int
+    triangle_end: int
+    net: ClothNet
+
+    def nodes(self, local) -> np.ndarray:
+        """Model node indices of this cloth's local node indices."""
+        local = np.asarray(local, dtype=int)
+        if np.any(local < 0) or np.any(local >= self.node_end - self.node_start):
+            raise InvalidInput(f"cloth {self.name!r}: node index out of range [0, {self.node_end - self.node_start})")
+        return local + self.node_start
+
+
+class ModelBuilder:
+    """Collects nodes, elements, triangles and colliders, then :meth:`finalize` checks them and
+    puts them on a device. Z is up; ``gravity`` is G of eq. (3) [m/s^2]."""
+
+    def __init__(self, gravity=(0.0, 0.0, -GRAVITY)) -> None:
+        self.gravity = tuple(float(g) for g in gravity)
+        self._points: list[np.ndarray] = []
+        self._uv: list[np.ndarray] = []
+        self._mass: list[np.ndarray] = []
+        self._material: list[np.ndarray] = []  # per node: mu, sigma, gamma, kappa, eps
+        self._elements: list[np.ndarray] = []
+        self._element_params: list[np.ndarray] = []  # rest, stiffness, damping, max length
+        self._triangles: list[np.ndarray] = []
+        self._kinematic: set[int] = set()
+        self._colliders: list[ColliderMesh] = []
+        self.cloths: list[ClothRange] = []
+        self._node_count = 0
+        self._triangle_count = 0
+
+    @property
+    def node_count(self) -> int:
+        return self._node_count
+
+    def add_node(self, point, mass: float, *, fabric: Fabric | None = None) -> int:
+        """Add a lone node [m, kg]; ``fabric`` gives its collision parameters."""
+        return int(self._add_nodes(np.asarray(point, float).reshape(1, 3), np.array([mass]), fabric)[0])
+
+    def add_element(self, i: int, k: int, *, stiffness: float, damping: float = 0.0,
+                    rest_length: float | None = None, strain_limit: float = np.inf) -> None:
+        """Add one spring-damper-plastic element (figure 4) between nodes i and k.
+
+        ``stiffness`` is the spring constant e_ik [N/m], ``damping`` the damper [kg/s],
+        ``rest_length`` l0 [m] (default: the current distance), ``strain_limit`` L_sh [-].
+        """
+        for n in (i, k):
+            if not 0 <= n < self._node_count:
+                raise InvalidInput(f"element node index {n} out of range [0, {self._node_count})")
+        if rest_length is None:
+            pts = np.concatenate(self._points)
+            rest_length = float(np.linalg.norm(pts[k] - pts[i]))
+        self._push_elements(np.array([[i, k]]), np.array([rest_length]), np.array([stiffness]),
+                            np.array([damping]), np.array([strain_limit]))
+
+    def add_cloth(self, net: ClothNet, fabric: Fabric, points, *, name: str = "cloth") -> ClothRange:
+        """Add a cloth cut from ``net`` in ``fabric``, its nodes placed at ``points`` [m].
+
+        Rest lengths come from the flat net (the pattern), not from the placement, so a cloth
+        placed curved starts unstretched only if the placement preserves lengths.
+        """
+        points = np.asarray(points, float)
+        if points.shape != (net.node_count, 3):
+            raise InvalidInput(f"cloth {name!r}: expected {net.node_count} points of 3 coordinates, got shape {points.shape}")
+        masses = fabric.areal_density * net.node_areas()
+        node_start, tri_start = self._node_count, self._triangle_count
+        self._add_nodes(points, masses, fabric, uv=net.uv)
+
+        rest = np.linalg.norm(net.uv[net.elements[:, 1]] - net.uv[net.elements[:, 0]], axis=1)
+        tensile = {ElementKind.WARP: fabric.tensile_warp, ElementKind.WEFT: fabric.tensile_weft,
+                   ElementKind.SHEAR: fabric.shear, ElementKind.BEND: fabric.bending}
+        modulus = np.array([tensile[ElementKind(k)] for k in range(4)])[net.kinds]
+        keep = modulus > 0.0
+        limited = np.isin(net.kinds, [ElementKind.WARP, ElementKind.WEFT])
+        self._push_elements(
+            net.elements[keep] + node_start,
+            rest[keep],
+            (modulus * net.widths / np.maximum(rest, 1e-12))[keep],
+            (fabric.damping * net.widths * rest)[keep],
+            np.where(limited, fabric.strain_limit, np.inf)[keep],
+        )
+        self._triangles.append(net.triangles + node_start)
+        self._triangle_count += len(net.triangles)
+        cloth = ClothRange(name, node_start, self._node_count, tri_start, self._triangle_count, net)
+        self.cloths.append(cloth)
+        return cloth
+
+    def pin(self, nodes) -> None:
+        """Make nodes kinematic: held still, or moved by a handle through ``Control``."""
+        nodes = np.atleast_1d(np.asarray(nodes))
+        if nodes.size and (not np.issubdtype(nodes.dtype, np.integer) or nodes.min() < 0 or nodes.max() >= self._node_count):
+            raise InvalidInput(f"pinned node index out of range [0, {self._node_count}): {nodes.tolist()[:5]}")
+        self._kinematic.update(int(n) for n in nodes)
+
+    def add_collider(self, collider: ColliderMesh) -> None:
+        if not isinstance(collider, ColliderMesh):
+            raise InvalidInput("colliders must be ColliderMesh objects (see party.body)")
+        self._colliders.append(collider)
+
+    def _add_nodes(self, points: np.ndarray, masses: np.ndarray, fabric: Fabric | None, uv=None) -> np.ndarray:
+        if not np.all(np.isfinite(points)):
+            bad = int(np.argwhere(~np.isfinite(points).all(axis=1))[0, 0]) + self._node_count
+            raise InvalidInput(f"node {bad} has a non-finite position (NaN or inf)")
+        if not np.all(np.isfinite(masses) & (masses > 0)):
+            raise InvalidInput("node masses must be positive and finite (check the fabric's areal density)")
+        fabric = fabric or Fabric("default", 0.1, 1.0, 1.0, 0.0)
+        start = self._node_count
+        self._points.append(points)
+        self._uv.append(np.zeros((len(points), 2)) if uv is None else np.asarray(uv, float))
+        self._mass.append(masses)
+        material = [fabric.friction, fabric.restitution, fabric.momentum_propagation,
+                    fabric.cloth_friction, fabric.thickness]
+        self._material.append(np.tile(material, (len(points), 1)))
+        self._node_count += len(points)
+        return np.arange(start, self._node_count)
+
+    def _push_elements(self, pairs, rest, stiffness, damping, strain_limit) -> None:
+        if np.any(~np.isfinite(stiffness) | (stiffness <= 0)):
+            raise InvalidInput("element stiffness must be positive and finite")
+        if np.any(~np.isfinite(damping) | (damping < 0)):
+            raise InvalidInput("element damping must be non-negative and finite")
+        if np.any(~np.isfinite(rest) | (rest <= 0)):
+            raise InvalidInput("element rest length must be positive (two nodes of an element coincide)")
+        if np.any(pairs[:, 0] == pairs[:, 1]):
+            raise InvalidInput("an element joins a node to itself")
+        max_length = np.where(np.isfinite(strain_limit), rest * (1.0 + strain_limit), np.inf)
+        self._elements.append(np.asarray(pairs, np.int32))
+        self._element_params.append(np.stack([rest, stiffness, damping, max_length], axis=1))
+
+    def finalize(self, device: str | None = None) -> Model:
+        """Check everything and build the immutable :class:`Model` on ``device``."""
+        device = devices.resolve(device)
+        if self._node_count == 0:
+            raise InvalidInput("the model has no nodes")
+        points = np.concatenate(self._points)
+        mass = np.concatenate(self._mass)
+        material = np.concatenate(self._material)
+        elements = np.concatenate(self._elements) if self._elements else np.zeros((0, 2), np.int32)
+        params = np.concatenate(self._element_params) if self._element_params else np.zeros((0, 4))
+        triangles = np.concatenate(self._triangles) if self._triangles else np.zeros((0, 3), np.int32)
+        kinematic = np.zeros(self._node_count, bool)
+        kinematic[list(self._kinematic)] = True
+        inv_mass = np.where(kinematic, 0.0, 1.0 / mass)
+
+        n = self._node_count
+        elem_offsets, elem_ids = _csr(np.concatenate([elements[:, 0], elements[:, 1]]),
+                                      np.tile(np.arange(len(elements)), 2), n)
+        edges = np.concatenate([elements, triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+        edges = np.unique(np.sort(edges, axis=1), axis=0) if len(edges) else edges
+        nbr_offsets, nbr_ids = _csr(np.concatenate([edges[:, 0], edges[:, 1]]),
+                                    np.concatenate([edges[:, 1], edges[:, 0]]), n)
+        color_offsets, colored = _color_elements(elements, n)
+
+        faces, rest_pts, normals, ranges, velocity, names = _merge_colliders(self._colliders)
+
+        def arr(x, dtype):
+            return wp.array(np.ascontiguousarray(x), dtype=dtype, device=device)
+
+        max_len = params[:, 3].copy()
+        max_len[~np.isfinite(max_len)] = 1e30
+        return Model(
+            device=device,
+            node_count=n,
+            element_count=len(elements),
+            triangle_count=len(triangles),
+            node_rest_points=arr(points.astype(np.float32), wp.vec3),
+            node_uv=np.concatenate(self._uv),
+            node_mass=arr(mass.astype(np.float32), wp.float32),
+            node_inv_mass=arr(inv_mass.astype(np.float32), wp.float32),
+            node_friction=arr(material[:, 0].astype(np.float32), wp.float32),
+            node_restitution=arr(material[:, 1].astype(np.float32), wp.float32),
+            node_gamma=arr(material[:, 2].astype(np.float32), wp.float32),
+            node_kappa=arr(material[:, 3].astype(np.float32), wp.float32),
+            node_thickness=arr(material[:, 4].astype(np.float32), wp.float32),
+            node_element_offsets=arr(elem_offsets, wp.int32),
+            node_element_ids=arr(elem_ids, wp.int32),
+            node_neighbor_offsets=arr(nbr_offsets, wp.int32),
+            node_neighbors=arr(nbr_ids, wp.int32),
+            element_nodes=arr(elements.astype(np.int32), wp.vec2i),
+            element_rest_length=arr(params[:, 0].astype(np.float32), wp.float32),
+            element_stiffness=arr(params[:, 1].astype(np.float32), wp.float32),
+            element_damping=arr(params[:, 2].astype(np.float32), wp.float32),
+            element_max_length=arr(max_len.astype(np.float32), wp.float32),
+            element_color_offsets=tuple(int(c) for c in color_offsets),
+            element_colored=arr(colored, wp.int32),
+            triangle_nodes=arr(triangles.astype(np.int32), wp.int32),
+            collider_names=names,
+            collider_face_ranges=ranges,
+            collider_faces=arr(faces, wp.int32),
+            collider_rest_points=arr(rest_pts.astype(np.float32), wp.vec3),
+            collider_normals=arr(normals.astype(np.float32), wp.vec3),
+            collider_velocity=velocity,
+            gravity=wp.vec3(*self.gravity),
+            host={
+                "points": points, "mass": mass, "elements": elements, "element_params": params,
+                "triangles": triangles, "kinematic": kinematic, "cloths": tuple(self.cloths),
+                "colliders": tuple(self._colliders),
+            },
+        )
+
+
+def _csr(rows: np.ndarray, values: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    order = np.argsort(rows, kind="stable")
+    offsets = np.zeros(n + 1, np.int32)
+    np.add.at(offsets, rows + 1, 1)
+    return np.cumsum(offsets).astype(np.int32), values[order].astype(np.int32)
+
+
+def _color_elements(elements: np.ndarray, n: int) -> tuple[list[int], np.ndarray]:
+    """Greedy edge colouring: no two elements of one colour share a node."""
+    colors = np.full(len(elements), -1, np.int64)
+    used: list[set[int]] = [set() for _ in range(n)]
+    for e, (i, k) in enumerate(elements.tolist()):
+        taken = used[i] | used[k]
+        c = 0
+        while c in taken:
+            c += 1
+        colors[e] = c
+        used[i].add(c)
+        used[k].add(c)
+    order = np.argsort(colors, kind="stable")
+    counts = np.bincount(colors, minlength=1) if len(colors) else np.zeros(0, int)
+    offsets = [0] + np.cumsum(counts).tolist()
+    return offsets, order.astype(np.int32)
+
+
+def _merge_colliders(colliders: list[ColliderMesh]):
+    faces, points, normals, ranges, velocities, names = [], [], [], [], [], []
+    v0 = f0 = 0
+    for c in colliders:
+        faces.append(c.faces + v0)
+        points.append(c.vertices)
+        normals.append(c.corner_normals())
+        velocities.append(np.tile(c.velocity, (len(c.vertices), 1)))
+        ranges.append((f0, f0 + len(c.faces)))
+        names.append(c.name)
+        v0 += len(c.vertices)
+        f0 += len(c.faces)
+    if not colliders:
+        return (np.zeros((0, 3), np.int32), np.zeros((0, 3)), np.zeros((0, 3, 3)), (), np.zeros((0, 3)), ())
+    return (np.concatenate(faces).astype(np.int32), np.concatenate(points), np.concatenate(normals),
+            tuple(ranges), np.concatenate(velocities), tuple(names))

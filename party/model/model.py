@@ -1,0 +1,110 @@
+"""The finalized, read-only description of a simulation."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+from .state import Control, State
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """Everything that does not change during a run, on one Warp device.
+
+    Node arrays have shape [node_count]; element arrays [element_count]; triangle arrays
+    [triangle_count]. Units: m, kg, s, N.
+
+    Attributes:
+        node_mass: Lumped node mass [kg], float.
+        node_inv_mass: 1/mass [1/kg], 0 for kinematic nodes (pinned or driven by a handle).
+        node_friction, node_restitution: mu and sigma of the node's fabric (eqs. 10-11).
+        node_gamma, node_kappa: gamma and kappa of the node's fabric (eqs. 13-14).
+        node_thickness: eps of the node's fabric [m] (section 6.1).
+        node_element_offsets, node_element_ids: CSR list of the elements at each node.
+        node_neighbor_offsets, node_neighbors: CSR list of each node's mesh neighbours (nodes
+            sharing a triangle), excluded from cloth-cloth response (section 6.3).
+        element_nodes: (i, k) per element, vec2i.
+        element_rest_length: l0_ik [m].
+        element_stiffness: e_ik as a spring constant [N/m].
+        element_damping: Viscous coefficient [kg/s] of the element's damper.
+        element_max_length: (1 + L_sh) * l0 [m]; inf when the element has no plastic limit.
+        element_color_offsets, element_colored: elements grouped so that no two in a group
+            share a node (host offsets, device ids), for the plastic-limit passes.
+        triangle_nodes: (a, b, c) per cloth triangle, int32 shape [t, 3].
+        collider_faces: Triangles of all colliders together, int32 shape [c, 3].
+        collider_rest_points: Collider vertex positions at set-up [m].
+        collider_normals: Collider normals at each face corner at set-up, unit, vec3 shape
+            [c, 3] (smooth across soft edges, the face normal across creases).
+        gravity: G [m/s^2], vec3.
+    """
+
+    device: str
+    node_count: int
+    element_count: int
+    triangle_count: int
+    node_rest_points: wp.array
+    node_uv: np.ndarray
+    node_mass: wp.array
+    node_inv_mass: wp.array
+    node_friction: wp.array
+    node_restitution: wp.array
+    node_gamma: wp.array
+    node_kappa: wp.array
+    node_thickness: wp.array
+    node_element_offsets: wp.array
+    node_element_ids: wp.array
+    node_neighbor_offsets: wp.array
+    node_neighbors: wp.array
+    element_nodes: wp.array
+    element_rest_length: wp.array
+    element_stiffness: wp.array
+    element_damping: wp.array
+    element_max_length: wp.array
+    element_color_offsets: tuple[int, ...]
+    element_colored: wp.array
+    triangle_nodes: wp.array
+    collider_names: tuple[str, ...]
+    collider_face_ranges: tuple[tuple[int, int], ...]
+    collider_faces: wp.array
+    collider_rest_points: wp.array
+    collider_normals: wp.array
+    collider_velocity: np.ndarray
+    gravity: wp.vec3
+    host: dict
+
+    def state(self, *, velocity=None) -> State:
+        """A new State at the set-up positions, at rest unless ``velocity`` [m/s] is given."""
+        q = wp.clone(self.node_rest_points)
+        v = wp.zeros(self.node_count, dtype=wp.vec3, device=self.device)
+        if velocity is not None:
+            v.assign(np.broadcast_to(np.asarray(velocity, np.float32), (self.node_count, 3)).copy())
+        cq = wp.clone(self.collider_rest_points)
+        cv = wp.array(self.collider_velocity.astype(np.float32), dtype=wp.vec3, device=self.device)
+        return State(node_q=q, node_qd=v, collider_q=cq, collider_qd=cv, time=0.0)
+
+    def control(self) -> Control:
+        """Default control: no wind, kinematic nodes held still."""
+        return Control(
+            wind=(0.0, 0.0, 0.0),
+            kinematic_velocity=wp.zeros(self.node_count, dtype=wp.vec3, device=self.device),
+        )
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """Cloth triangles on the host, shape (t, 3)."""
+        return self.host["triangles"]
+
+    @property
+    def elements(self) -> np.ndarray:
+        return self.host["elements"]
+
+    @property
+    def kinematic(self) -> np.ndarray:
+        return self.host["kinematic"]
+
+    @property
+    def collider_count(self) -> int:
+        return len(self.collider_names)

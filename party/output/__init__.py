@@ -1,0 +1,1 @@
+"""Output: mesh frames, pictures, run summaries and the checks reported in them."""

@@ -1,0 +1,44 @@
+"""Mesh frames on disk (PLY, metres) and run checkpoints."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+
+def frame_path(out: Path, index: int) -> Path:
+    """``out/frames/frame_000123.ply``: names sort in time order."""
+    return out / "frames" / f"frame_{index:06d}.ply"
+
+
+def write_mesh(path: Path, points: np.ndarray, faces: np.ndarray, uv: np.ndarray | None = None) -> None:
+    """Write a triangle mesh [m] atomically (PLY or OBJ by suffix)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    visual = trimesh.visual.TextureVisuals(uv=uv) if uv is not None and path.suffix == ".obj" else None
+    mesh = trimesh.Trimesh(points, faces, process=False, visual=visual)
+    tmp = path.with_name(path.name + ".part")
+    tmp.write_bytes(mesh.export(file_type=path.suffix[1:]) if path.suffix == ".ply" else mesh.export(file_type=path.suffix[1:]).encode())
+    os.replace(tmp, path)
+
+
+def write_json(path: Path, data: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".part")
+    tmp.write_text(json.dumps(data, indent=2, sort_keys=False) + "\n")
+    os.replace(tmp, path)
+
+
+def save_checkpoint(path: Path, **arrays) -> None:
+    """Save the arrays needed to resume a run, atomically."""
+    tmp = path.with_name(path.name + ".part.npz")
+    np.savez(tmp, **arrays)
+    os.replace(tmp, path)
+
+
+def load_checkpoint(path: Path) -> dict:
+    with np.load(path) as data:
+        return {k: data[k] for k in data.files}

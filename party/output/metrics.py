@@ -1,0 +1,112 @@
+"""Checks of a result, independent of the solver's own collision machinery (Warp BVHs):
+nodes inside colliders, distance to colliders, cloth layer crossings, elongation."""
+
+from __future__ import annotations
+
+import numpy as np
+import warp as wp
+
+from ..body.collider import ColliderMesh
+
+
+@wp.kernel
+def _inside_and_distance(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,
+                         inside: wp.array(dtype=int), distance: wp.array(dtype=float)):
+    i = wp.tid()
+    q = wp.mesh_query_point_sign_winding_number(mesh, points[i], max_dist)
+    if q.result:
+        p = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
+        distance[i] = wp.length(points[i] - p)
+        if q.sign < 0.0:
+            inside[i] = 1
+
+
+def collider_inside_and_distance(points: np.ndarray, collider: ColliderMesh, device: str = "cpu",
+                                 max_dist: float = 1.0e3) -> tuple[np.ndarray, np.ndarray]:
+    """For each point [m]: inside the (closed) collider? and its distance to the surface [m]."""
+    mesh = wp.Mesh(points=wp.array(collider.vertices.astype(np.float32), dtype=wp.vec3, device=device),
+                   indices=wp.array(collider.faces.ravel().astype(np.int32), dtype=int, device=device))
+    n = len(points)
+    inside = wp.zeros(n, dtype=int, device=device)
+    distance = wp.full(n, 1.0e30, dtype=float, device=device)
+    wp.launch(_inside_and_distance, dim=n,
+              inputs=[mesh.id, wp.array(points.astype(np.float32), dtype=wp.vec3, device=device), max_dist,
+                      inside, distance], device=device)
+    return inside.numpy().astype(bool), distance.numpy().astype(float)
+
+
+def body_penetrations(points: np.ndarray, colliders, device: str = "cpu") -> int:
+    """Number of nodes inside any collider."""
+    inside = np.zeros(len(points), bool)
+    for c in colliders:
+        inside |= collider_inside_and_distance(points, c, device)[0]
+    return int(inside.sum())
+
+
+@wp.func
+def _segment_hits_triangle(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> bool:
+    """Strict segment-triangle intersection (Moller-Trumbore on the segment)."""
+    d = q - p
+    e1 = b - a
+    e2 = c - a
+    h = wp.cross(d, e2)
+    det = wp.dot(e1, h)
+    if wp.abs(det) < 1.0e-18:
+        return False
+    inv = 1.0 / det
+    s = p - a
+    u = inv * wp.dot(s, h)
+    if u < 0.0 or u > 1.0:
+        return False
+    qv = wp.cross(s, e1)
+    w = inv * wp.dot(d, qv)
+    if w < 0.0 or u + w > 1.0:
+        return False
+    t = inv * wp.dot(e2, qv)
+    return t > 0.0 and t < 1.0
+
+
+@wp.kernel
+def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
+                    edges: wp.array(dtype=wp.vec2i), count: wp.array(dtype=int)):
+    e = wp.tid()
+    i = edges[e][0]
+    k = edges[e][1]
+    p = points[i]
+    q = points[k]
+    lo = wp.min(p, q)
+    hi = wp.max(p, q)
+    query = wp.mesh_query_aabb(mesh, lo, hi)
+    t = int(0)
+    while wp.mesh_query_aabb_next(query, t):
+        a = tris[t, 0]
+        b = tris[t, 1]
+        c = tris[t, 2]
+        if a == i or a == k or b == i or b == k or c == i or c == k:
+            continue
+        if _segment_hits_triangle(p, q, points[a], points[b], points[c]):
+            wp.atomic_add(count, 0, 1)
+
+
+def cloth_crossings(points: np.ndarray, triangles: np.ndarray, device: str = "cpu") -> int:
+    """Number of (mesh edge, triangle) pairs of the cloth that pass through each other, edges and
+    triangles sharing a node excluded: zero when no layer crosses another."""
+    if len(triangles) == 0:
+        return 0
+    edges = np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1), axis=0)
+    pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=device)
+    mesh = wp.Mesh(points=pts, indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
+    count = wp.zeros(1, dtype=int, device=device)
+    wp.launch(_edge_crossings, dim=len(edges),
+              inputs=[mesh.id, pts, wp.array(triangles.astype(np.int32), dtype=int, device=device),
+                      wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=device), count], device=device)
+    return int(count.numpy()[0])
+
+
+def max_elongation(points: np.ndarray, elements: np.ndarray, rest_length: np.ndarray, limited: np.ndarray) -> float:
+    """Largest length / rest length over the plastic-limited elements (warp and weft) [-]."""
+    if not limited.any():
+        return 1.0
+    e = elements[limited]
+    length = np.linalg.norm(points[e[:, 1]] - points[e[:, 0]], axis=1)
+    return float((length / rest_length[limited]).max())

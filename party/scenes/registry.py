@@ -1,0 +1,19 @@
+"""Scenes by name."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from ..errors import InvalidInput
+from . import rod_wind
+
+SCENES: dict[str, tuple[Callable, str]] = {
+    "rod-wind": (rod_wind.build, "Experiment 1: cloth over a rod in a cross wind (figure 11)"),
+}
+
+
+def scene_by_name(name: str) -> Callable:
+    try:
+        return SCENES[name][0]
+    except KeyError:
+        raise InvalidInput(f"unknown scene {name!r}; known: {', '.join(sorted(SCENES))}") from None

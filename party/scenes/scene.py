@@ -1,0 +1,35 @@
+"""What a scene hands to the runner."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+from ..model import Model
+
+
+@dataclass
+class Scene:
+    """A ready-to-run simulation.
+
+    Attributes:
+        name: Scene name (as on the command line).
+        model: The assembled model.
+        solver: An object with ``step(state_in, state_out, control, dt)``.
+        dt: Time step [s].
+        duration: Simulated time [s].
+        frame_interval: Simulated time between output frames [s].
+        wind: Air velocity [m/s] as a function of time [s], or None for still air.
+        view: Camera for pictures: matplotlib ``elev`` and ``azim`` [degrees].
+        parameters: Scene settings echoed into ``summary.json``.
+    """
+
+    name: str
+    model: Model
+    solver: object
+    dt: float
+    duration: float
+    frame_interval: float
+    wind: Callable[[float], tuple[float, float, float]] | None = None
+    view: dict = field(default_factory=lambda: {"elev": 15.0, "azim": -60.0})
+    parameters: dict = field(default_factory=dict)

@@ -1,0 +1,6 @@
+"""Solvers advance a State: ``solver.step(state_in, state_out, control, dt)``."""
+
+from .aero import Air
+from .explicit import SolverExplicit
+
+__all__ = ["Air", "SolverExplicit"]

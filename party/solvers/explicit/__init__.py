@@ -1,0 +1,3 @@
+from .solver import SolverExplicit
+
+__all__ = ["SolverExplicit"]

@@ -1,0 +1,117 @@
+"""Kernels of the explicit solver (paper sections 4-5)."""
+
+import warp as wp
+
+
+@wp.kernel
+def net_forces_and_velocity(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    elem_offsets: wp.array(dtype=int),
+    elem_ids: wp.array(dtype=int),
+    elem_nodes: wp.array(dtype=wp.vec2i),
+    rest_length: wp.array(dtype=float),
+    stiffness: wp.array(dtype=float),
+    damping: wp.array(dtype=float),
+    f_ext: wp.array(dtype=wp.vec3),
+    gravity: wp.vec3,
+    kinematic_velocity: wp.array(dtype=wp.vec3),
+    dt: float,
+    x_out: wp.array(dtype=wp.vec3),
+    v_out: wp.array(dtype=wp.vec3),
+):
+    """Eq. (3) with f_int = f_spring + f_visco (section 5), gathered per node:
+
+    f_spring = sum_k e_ik l_ik d_ik,  l_ik = |r_k - r_i| - l0_ik,  d_ik = (r_k - r_i)/|r_k - r_i|
+    f_visco  = sum_k c_ik (v_k - v_i)
+    v* = v + (df / m + G) dt
+
+    Kinematic nodes take the velocity the control imposes. Positions are copied to x_out for the
+    collision pass and eq. (4).
+    """
+    i = wp.tid()
+    xi = x[i]
+    x_out[i] = xi
+    if inv_mass[i] == 0.0:
+        v_out[i] = kinematic_velocity[i]
+        return
+    vi = v[i]
+    f = f_ext[i]
+    for j in range(elem_offsets[i], elem_offsets[i + 1]):
+        e = elem_ids[j]
+        pair = elem_nodes[e]
+        k = pair[0]
+        if k == i:
+            k = pair[1]
+        d = x[k] - xi
+        length = wp.length(d)
+        if length > 1.0e-12:
+            f += stiffness[e] * (length - rest_length[e]) * (d / length)
+        f += damping[e] * (v[k] - vi)
+    v_out[i] = vi + (f * inv_mass[i] + gravity) * dt
+
+
+@wp.kernel
+def plastic_limit(
+    colored: wp.array(dtype=int),
+    offset: int,
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    elem_nodes: wp.array(dtype=wp.vec2i),
+    max_length: wp.array(dtype=float),
+    dt: float,
+):
+    """f_plas (section 5, figure 5): an element may not stretch beyond (1 + L_sh) l0.
+
+    For an element whose length at the end of the step, |(r_k + v_k dt) - (r_i + v_i dt)|,
+    would pass the limit, the relative velocity that stretches it further is cancelled (split
+    by inverse mass), which is the force component f_plas removes. Elements of one colour share
+    no node, so a colour is processed in parallel; colours run one after another.
+    """
+    e = colored[offset + wp.tid()]
+    pair = elem_nodes[e]
+    i = pair[0]
+    k = pair[1]
+    wi = inv_mass[i]
+    wk = inv_mass[k]
+    if wi + wk == 0.0:
+        return
+    p = (x[k] + v[k] * dt) - (x[i] + v[i] * dt)
+    length = wp.length(p)
+    limit = max_length[e]
+    if length <= limit:
+        return
+    direction = p / length
+    excess = (length - limit) / (dt * (wi + wk))
+    v[i] = v[i] + direction * (excess * wi)
+    v[k] = v[k] - direction * (excess * wk)
+
+
+@wp.kernel
+def count_over_limit(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    elem_nodes: wp.array(dtype=wp.vec2i),
+    max_length: wp.array(dtype=float),
+    dt: float,
+    tolerance: float,
+    count: wp.array(dtype=int),
+):
+    """Count elements whose end-of-step length would pass (1 + tolerance) times their limit."""
+    e = wp.tid()
+    pair = elem_nodes[e]
+    if inv_mass[pair[0]] + inv_mass[pair[1]] == 0.0:
+        return
+    p = (x[pair[1]] + v[pair[1]] * dt) - (x[pair[0]] + v[pair[0]] * dt)
+    if wp.length(p) > max_length[e] * (1.0 + tolerance):
+        wp.atomic_add(count, 0, 1)
+
+
+@wp.kernel
+def advance_positions(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float):
+    """Eq. (4): r(t + dt) = r(t) + v(t + dt) dt."""
+    i = wp.tid()
+    x[i] = x[i] + v[i] * dt

@@ -1,0 +1,114 @@
+"""Cloth against body: eqs. (8)-(12) exactly, thickness, no tunnelling."""
+
+import numpy as np
+import pytest
+
+from party.body import box, floor
+from party.collision import CollisionSettings
+from party.errors import InvalidInput
+from party.fabric import wool_flannel
+from party.model import ModelBuilder
+from party.solvers import SolverExplicit
+from conftest import simulate
+
+MU, SIGMA, EPS, DT = 0.6, 0.03, 3.0e-3, 1.0e-4
+
+
+def paper_response(v, n, mu, sigma, v_body):
+    """Eqs. (8)-(12) written out with NumPy."""
+    vr = v - v_body
+    un = vr @ n
+    vn = un * n
+    vt = vr - vn
+    if np.linalg.norm(vt) < mu * abs(un):
+        vt = np.zeros(3)
+    else:
+        vt = vt * (1 - mu * abs(un) / np.linalg.norm(vt))
+    return vt - sigma * vn + v_body
+
+
+def node_over_floor(velocity, floor_velocity=(0.0, 0.0, 0.0), height=0.005):
+    fabric = wool_flannel()
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    b.add_node((0.0, 0.0, height), 1e-4, fabric=fabric)
+    slab = floor(0.0, size=2.0)
+    b.add_collider(type(slab)(slab.name, slab.vertices, slab.faces, np.asarray(floor_velocity, float)))
+    model = b.finalize("cpu")
+    solver = SolverExplicit(model, collision=CollisionSettings(cloth=False))
+    state, out = model.state(velocity=velocity), model.state()
+    solver.step(state, out, model.control(), DT)
+    return out
+
+
+@pytest.mark.parametrize("velocity", [
+    (1.0, 0.5, -30.0),   # inside the friction cone: sticks
+    (25.0, 0.0, -30.0),  # outside: slides, |v_t| reduced by mu |v_n|
+    (0.0, 0.0, -30.0),   # head-on
+])
+def test_static_floor_response_is_eqs_8_to_12(velocity):
+    out = node_over_floor(velocity)
+    expected = paper_response(np.array(velocity), np.array([0, 0, 1.0]), MU, SIGMA, np.zeros(3))
+    assert np.allclose(out.velocities()[0], expected, atol=1e-4)
+    assert out.positions()[0, 2] >= EPS - 1e-6
+
+
+def test_inside_and_outside_cone_differ_as_the_paper_says():
+    stick = node_over_floor((10.0, 0.0, -30.0)).velocities()[0]
+    slide = node_over_floor((20.0, 0.0, -30.0)).velocities()[0]
+    assert stick[0] == pytest.approx(0.0, abs=1e-5)
+    assert slide[0] == pytest.approx(20.0 - MU * 30.0, rel=1e-4)
+
+
+def test_moving_body_velocity_is_added_back():
+    v_floor = np.array([2.0, -1.0, 0.5])
+    out = node_over_floor((15.0, 3.0, -30.0), floor_velocity=v_floor)
+    expected = paper_response(np.array([15.0, 3.0, -30.0]), np.array([0, 0, 1.0]), MU, SIGMA, v_floor)
+    assert np.allclose(out.velocities()[0], expected, atol=1e-4)
+
+
+def test_fast_node_does_not_tunnel_through_thin_plate():
+    """A 1 mm plate; the node moves 5 mm per step (50 m/s), more than eps per step and more
+    than the plate is thick."""
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    b.add_node((0.0, 0.0, 0.05), 1e-4, fabric=wool_flannel())
+    b.add_collider(box((0.5, 0.5, 0.001), center=(0, 0, 0)))
+    model = b.finalize("cpu")
+    solver = SolverExplicit(model, collision=CollisionSettings(cloth=False))
+    state, out = model.state(velocity=(0.3, 0.0, -50.0)), model.state()
+    for _ in range(40):
+        solver.step(state, out, model.control(), DT)
+        state, out = out, state
+    z = state.positions()[0, 2]
+    assert z >= 0.0005 + EPS - 1e-6
+
+
+def test_resting_node_stays_eps_above_under_gravity():
+    b = ModelBuilder()
+    b.add_node((0.0, 0.0, 0.01), 1e-4, fabric=wool_flannel())
+    b.add_collider(floor(0.0))
+    model = b.finalize("cpu")
+    state = simulate(model, SolverExplicit(model, collision=CollisionSettings(cloth=False)), 3000, DT)
+    assert state.positions()[0, 2] == pytest.approx(EPS, abs=1e-5)
+    assert abs(state.velocities()[0, 2]) < 0.05
+
+
+@pytest.mark.parametrize("vertices,faces,message", [
+    (np.zeros((0, 3)), np.zeros((0, 3), int), "is empty"),
+    (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1.0]]),
+     np.array([[0, 1, 2], [0, 1, 3], [0, 1, 4]]), "non-manifold"),
+    (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]), np.array([[0, 1, 5]]), "face index out of range"),
+    (np.array([[0, 0, np.nan], [1, 0, 0], [0, 1, 0.0]]), np.array([[0, 1, 2]]), "non-finite"),
+])
+def test_bad_collider_meshes(vertices, faces, message):
+    from party.body import ColliderMesh
+
+    with pytest.raises(InvalidInput, match=message):
+        ColliderMesh("prop", vertices, faces)
+
+
+def test_inward_normals_are_refused():
+    from party.body import ColliderMesh
+
+    b = box((1, 1, 1))
+    with pytest.raises(InvalidInput, match="inward-facing normals"):
+        ColliderMesh("inside-out", b.vertices, b.faces[:, ::-1])

@@ -1,0 +1,95 @@
+"""Bad input and blow-ups: one line naming the problem, non-zero exit, results kept."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from party.errors import InvalidInput, SimulationUnstable
+from party.fabric import wool_flannel
+from party.meshing import rectangular_net
+from party.model import ModelBuilder
+from party.scenes.runner import run_scene
+from party.scenes.scene import Scene
+from party.solvers import SolverExplicit
+
+
+def party(*args):
+    return subprocess.run([sys.executable, "-m", "party.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--dt", "0"], "error: time step must be positive, got 0.0"),
+    (["--dt", "-1e-4"], "error: time step must be positive, got -0.0001"),
+    (["--duration", "0"], "error: duration must be positive, got 0.0"),
+    (["--dt", "0.001"], "error: time step 0.001 s exceeds this net's explicit stability limit"),
+    (["--spacing", "-0.01"], "error: spacing must be positive"),
+])
+def test_bad_run_options(tmp_path, args, message):
+    result = party("run", "rod-wind", "--out", str(tmp_path / "o"), "--no-progress", *args)
+    assert result.returncode == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(message), result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_unknown_scene():
+    result = party("run", "no-such-scene", "--out", "x")
+    assert result.returncode == 1
+    assert result.stderr.strip() == "error: unknown scene 'no-such-scene'; known: rod-wind"
+
+
+def test_scenes_are_listed():
+    result = party("scenes")
+    assert result.returncode == 0 and result.stdout.startswith("rod-wind")
+
+
+def test_nan_position_is_refused():
+    net = rectangular_net(0.1, 0.1, 0.05)
+    pts = np.c_[net.uv, np.zeros(net.node_count)]
+    pts[4, 1] = np.nan
+    with pytest.raises(InvalidInput, match="node 4 has a non-finite position"):
+        ModelBuilder().add_cloth(net, wool_flannel(), pts)
+
+
+def test_pinned_index_out_of_range():
+    net = rectangular_net(0.1, 0.1, 0.05)
+    b = ModelBuilder()
+    b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
+    with pytest.raises(InvalidInput, match=r"pinned node index out of range \[0, 9\)"):
+        b.pin([3, 9])
+
+
+def test_blow_up_stops_with_advice_and_keeps_frames(tmp_path):
+    """A damper far too strong for the step (c dt / m = 40): undamped stability holds, the
+    damped integration does not."""
+    b = ModelBuilder(gravity=(0.0, 0.0, -9.8))
+    net = rectangular_net(0.1, 0.1, 0.01)
+    cloth = b.add_cloth(net, wool_flannel().with_(damping=4.0e5), np.c_[net.uv, np.zeros(net.node_count)])
+    b.pin(cloth.nodes([0]))
+    model = b.finalize("cpu")
+    pts = model.state().positions()
+    pts += np.random.default_rng(1).normal(0, 1e-4, pts.shape)
+    model.node_rest_points.assign(pts.astype(np.float32))
+    scene = Scene("blow-up", model, SolverExplicit(model, collision=None), dt=1e-4, duration=0.1, frame_interval=0.002)
+    with pytest.raises(SimulationUnstable, match=r"simulation became unstable .* try a smaller --dt, e.g. 5e-05"):
+        run_scene(scene, tmp_path, progress=False)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] == "unstable"
+    assert (tmp_path / "frames" / "frame_000000.ply").exists()
+
+
+def test_resume_continues_where_it_stopped(tmp_path):
+    from party.scenes.rod_wind import build
+
+    first = run_scene(build(spacing=0.05, duration=0.02, frame_interval=0.01), tmp_path, progress=False)
+    resumed = run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path, resume=True, progress=False)
+    fresh = run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path / "fresh", progress=False)
+    assert first["steps"] == 200 and resumed["steps"] == 400
+    import trimesh
+
+    a = trimesh.load(tmp_path / "frames" / "frame_000004.ply", process=False).vertices
+    b = trimesh.load(tmp_path / "fresh" / "frames" / "frame_000004.ply", process=False).vertices
+    assert np.allclose(a, b, atol=1e-6)

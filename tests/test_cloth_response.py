@@ -1,0 +1,121 @@
+"""Cloth against cloth: eqs. (13)-(14) exactly, neighbours excluded, layers kept apart."""
+
+import numpy as np
+import pytest
+
+from party.body import box, sphere
+from party.collision import CollisionSettings
+from party.fabric import wool_flannel
+from party.meshing import rectangular_net
+from party.model import ModelBuilder
+from party.output.metrics import body_penetrations, cloth_crossings, collider_inside_and_distance
+from party.solvers import SolverExplicit
+from conftest import simulate
+
+DT = 1.0e-4
+GAMMA, KAPPA = 0.5, 0.23
+
+
+def node_hits_triangle_vertex(v0, v1=(0.0, 0.0, 0.0), gamma=GAMMA):
+    """A lone node moving straight at vertex a of a free triangle (a node-node case: the
+    struck point has barycentric weights (1, 0, 0)). Gravity off, no springs act."""
+    fabric = wool_flannel().with_(momentum_propagation=gamma, tensile_warp=1e-9, tensile_weft=1e-9, damping=0.0)
+    net = rectangular_net(0.02, 0.02, 0.02)  # one quad: 4 nodes, 2 triangles
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    b.add_cloth(net, fabric, np.c_[net.uv, np.zeros(4)])
+    hitter = b.add_node((0.0, 0.0, 0.004), 2.3e-5 , fabric=fabric)
+    model = b.finalize("cpu")
+    velocity = np.zeros((5, 3))
+    velocity[:4] = v1
+    velocity[hitter] = v0
+    state, out = model.state(velocity=velocity), model.state()
+    SolverExplicit(model, collision=CollisionSettings(body=False, passes=1)).step(state, out, model.control(), DT)
+    return out.velocities(), hitter
+
+
+def test_eqs_13_14_node_node():
+    v0 = np.array([0.0, 0.0, -20.0])
+    v, hitter = node_hits_triangle_vertex(v0)
+    assert np.allclose(v[hitter], KAPPA * GAMMA * v0, atol=1e-5)           # (13)
+    assert np.allclose(v[0], KAPPA * (0.0 + (1 - GAMMA) * v0), atol=1e-5)  # (14)
+    assert np.allclose(v[1:4], 0.0, atol=1e-6)
+
+
+def test_exchange_is_taken_in_the_struck_points_frame():
+    """With the struck node moving too, eqs. (13)-(14) apply to the velocity relative to it."""
+    v0, v1 = np.array([0.0, 3.0, -20.0]), np.array([0.0, 1.0, -2.0])
+    v, hitter = node_hits_triangle_vertex(v0, v1)
+    assert np.allclose(v[hitter], v1 + KAPPA * GAMMA * (v0 - v1), atol=1e-4)
+    assert np.allclose(v[0], v1 + KAPPA * (1 - GAMMA) * (v0 - v1), atol=1e-4)
+
+
+def test_mesh_neighbours_are_excluded():
+    """A node of a quad shooting through the quad's other triangle is not a collision."""
+    fabric = wool_flannel()
+    net = rectangular_net(0.02, 0.02, 0.02)
+    velocity = np.zeros((4, 3))
+    velocity[0] = (0.0, 0.0, -20.0)
+    results = []
+    for settings in (CollisionSettings(body=False), None):
+        b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+        b.add_cloth(net, fabric, np.c_[net.uv, np.zeros(4)])
+        model = b.finalize("cpu")
+        state, out = model.state(velocity=velocity), model.state()
+        SolverExplicit(model, collision=settings).step(state, out, model.control(), DT)
+        results.append(out.velocities())
+    assert np.array_equal(results[0], results[1])
+
+
+def stacked_cloths(layers: int, push: float, collider, size=0.2, spacing=0.0125, top=0.06, gap=0.012):
+    b = ModelBuilder()
+    fabric = wool_flannel()
+    net = rectangular_net(size, size, spacing)
+    for k in range(layers):
+        angle = 0.3 * k
+        rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+        xy = (net.uv - size / 2) @ rot.T
+        b.add_cloth(net, fabric, np.c_[xy, np.full(net.node_count, top + k * gap)], name=f"layer{k}")
+    b.add_collider(collider)
+    model = b.finalize("cpu")
+    velocity = np.zeros((model.node_count, 3))
+    velocity[:, 2] = -push
+    return model, velocity
+
+
+@pytest.mark.parametrize("layers,push", [(2, 0.0), (3, 1.0)])
+def test_stacked_layers_stay_outside_the_body_and_each_other(layers, push):
+    top_face = 0.04
+    model, velocity = stacked_cloths(layers, push, box((0.1, 0.1, 0.08), center=(0, 0, 0.0)))
+    solver = SolverExplicit(model, collision=CollisionSettings(passes=layers + 1))
+    state, scratch = model.state(velocity=velocity), model.state()
+    control = model.control()
+    colliders = model.host["colliders"]
+    for frame in range(8):
+        for _ in range(500):
+            solver.step(state, scratch, control, DT)
+            state, scratch = scratch, state
+        p = state.positions()
+        assert body_penetrations(p, colliders) == 0
+        assert cloth_crossings(p, model.triangles) == 0
+    p = state.positions()
+    cloths = model.host["cloths"]
+    centre_heights = [p[c.node_start:c.node_end][c.net.node_count // 2, 2] for c in cloths]
+    eps = wool_flannel().thickness
+    assert centre_heights[0] >= top_face + eps - 1e-5
+    assert np.all(np.diff(centre_heights) >= eps * 0.9)  # in order, a thickness apart
+
+
+def test_cloth_square_comes_to_rest_on_a_sphere():
+    radius = 0.1
+    ball = sphere(radius)
+    model, velocity = stacked_cloths(1, 0.0, ball, size=0.3, spacing=0.015, top=radius + 0.02)
+    solver = SolverExplicit(model, collision=CollisionSettings())
+    state = simulate(model, solver, 8000, DT)
+    p = state.positions()
+    inside, distance = collider_inside_and_distance(p, ball)
+    eps = wool_flannel().thickness
+    assert not inside.any()
+    assert distance.min() >= eps - 2e-4  # the icosphere's chords vs the true sphere
+    centre = p[model.node_count // 2]
+    assert centre[2] == pytest.approx(radius + eps, abs=1.5e-3)
+    assert p[:, 2].min() < 0.0  # the corners have fallen past the equator: it draped

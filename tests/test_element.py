@@ -1,0 +1,104 @@
+"""One element of the net (section 5): spring period, damper decay, plastic limit."""
+
+import math
+
+import numpy as np
+import pytest
+
+from party.model import ModelBuilder
+from party.solvers import SolverExplicit
+from conftest import simulate
+
+
+def one_element(k: float, c: float, m: float, stretch: float, strain_limit: float = math.inf):
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    anchor = b.add_node((0.0, 0.0, 0.0), 1.0)
+    mover = b.add_node((0.1 + stretch, 0.0, 0.0), m)
+    b.add_element(anchor, mover, stiffness=k, damping=c, rest_length=0.1, strain_limit=strain_limit)
+    b.pin([anchor])
+    model = b.finalize("cpu")
+    return model, SolverExplicit(model, collision=None)
+
+
+def trace(model, solver, steps, dt):
+    xs = []
+    simulate(model, solver, steps, dt, every=1, callback=lambda s, k: xs.append(s.node_q.numpy()[1, 0] - 0.1))
+    return np.array(xs)
+
+
+def test_period_matches_2pi_sqrt_m_over_k():
+    k, m, dt = 50.0, 0.02, 1.0e-4
+    model, solver = one_element(k, 0.0, m, 0.01)
+    x = trace(model, solver, 6000, dt)
+    up = np.where((x[:-1] < 0) & (x[1:] >= 0))[0]
+    # sub-step crossing times by linear interpolation
+    times = (up + (-x[up]) / (x[up + 1] - x[up]) + 1) * dt
+    period = np.diff(times).mean()
+    expected = 2 * math.pi * math.sqrt(m / k)
+    assert abs(period - expected) / expected < 0.01
+    assert abs(x.max() - 0.01) / 0.01 < 0.01  # undamped: amplitude kept
+
+
+def test_damping_decays_as_predicted():
+    k, m, c, dt = 50.0, 0.02, 0.02, 1.0e-4
+    model, solver = one_element(k, c, m, 0.01)
+    x = trace(model, solver, 6000, dt)
+    up = np.where((x[:-1] < 0) & (x[1:] >= 0))[0]
+    peaks = np.array([x[a:b].max() for a, b in zip(up[:-1], up[1:])])
+    ratio = peaks[1:4] / peaks[0:3]
+    zeta = c / (2 * math.sqrt(k * m))
+    period_d = 2 * math.pi / (math.sqrt(k / m) * math.sqrt(1 - zeta**2))
+    expected = math.exp(-c / (2 * m) * period_d)
+    assert np.allclose(ratio, expected, rtol=0.01)
+
+
+def hanging_chain(strain_limit: float):
+    """A 10-node chain pinned at the top whose own weight would stretch its top element by
+    35 %, far beyond the plastic limit."""
+    b = ModelBuilder()
+    n, l0, k = 10, 0.05, 50.0
+    nodes = [b.add_node((0.0, 0.0, -i * l0), 0.01) for i in range(n)]
+    for i in range(n - 1):
+        b.add_element(nodes[i], nodes[i + 1], stiffness=k, damping=0.02, rest_length=l0, strain_limit=strain_limit)
+    b.pin([nodes[0]])
+    model = b.finalize("cpu")
+    return model, SolverExplicit(model, collision=None)
+
+
+def chain_max_ratio(model, solver):
+    ratios = []
+
+    def check(state, _):
+        p = state.node_q.numpy()
+        ratios.append((np.linalg.norm(np.diff(p, axis=0), axis=1) / 0.05).max())
+
+    simulate(model, solver, 4000, 1.0e-4, every=20, callback=check)
+    return max(ratios)
+
+
+def test_plastic_limit_holds_under_load():
+    model, solver = hanging_chain(0.0995)
+    assert chain_max_ratio(model, solver) <= 1.0995 + 1e-4
+
+
+def test_without_limit_the_same_load_overstretches():
+    model, solver = hanging_chain(math.inf)
+    assert chain_max_ratio(model, solver) > 1.3
+
+
+def test_critical_time_step_scales_with_spacing():
+    """dt_crit = 2 / omega_max: omega_max = 2 sqrt(k/m) for an interior chain of the net
+    (k = K, m = rho h^2), a little higher at its half-mass edges; so dt_crit is proportional
+    to the spacing h and close to 1 / sqrt(K / (rho h^2))."""
+    from party.fabric import wool_flannel
+    from party.meshing import rectangular_net
+
+    found = {}
+    for spacing in (0.02, 0.01):
+        net = rectangular_net(0.4, 0.4, spacing)
+        b = ModelBuilder()
+        b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
+        found[spacing] = SolverExplicit(b.finalize("cpu"), collision=None).critical_time_step()
+        k, m = wool_flannel().tensile_warp, wool_flannel().areal_density * spacing**2
+        assert 0.9 < found[spacing] * math.sqrt(k / m) <= 1.0
+    assert found[0.02] / found[0.01] == pytest.approx(2.0, rel=0.02)
