@@ -52,6 +52,12 @@ def net_forces_and_velocity(
     v_out[i] = vi + (f * inv_mass[i] + gravity) * dt
 
 
+@wp.func
+def end_of_step_span(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), i: int, k: int, dt: float) -> wp.vec3:
+    """(r_k + v_k dt) - (r_i + v_i dt): the element's vector at the end of the step [m]."""
+    return (x[k] + v[k] * dt) - (x[i] + v[i] * dt)
+
+
 @wp.kernel
 def plastic_limit(
     colored: wp.array(dtype=int),
@@ -78,7 +84,7 @@ def plastic_limit(
     wk = inv_mass[k]
     if wi + wk == 0.0:
         return
-    p = (x[k] + v[k] * dt) - (x[i] + v[i] * dt)
+    p = end_of_step_span(x, v, i, k, dt)
     length = wp.length(p)
     limit = max_length[e]
     if length <= limit:
@@ -105,8 +111,7 @@ def count_over_limit(
     pair = elem_nodes[e]
     if inv_mass[pair[0]] + inv_mass[pair[1]] == 0.0:
         return
-    p = (x[pair[1]] + v[pair[1]] * dt) - (x[pair[0]] + v[pair[0]] * dt)
-    if wp.length(p) > max_length[e] * (1.0 + tolerance):
+    if wp.length(end_of_step_span(x, v, pair[0], pair[1], dt)) > max_length[e] * (1.0 + tolerance):
         wp.atomic_add(count, 0, 1)
 
 
