@@ -86,7 +86,7 @@ def test_resume_continues_where_it_stopped(tmp_path):
 
     first = run_scene(build(spacing=0.05, duration=0.02, frame_interval=0.01), tmp_path, progress=False)
     resumed = run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path, resume=True, progress=False)
-    fresh = run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path / "fresh", progress=False)
+    run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path / "fresh", progress=False)
     assert first["steps"] == 200 and resumed["steps"] == 400
     import trimesh
 

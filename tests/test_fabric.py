@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from party.errors import InvalidInput
-from party.fabric import Fabric, wool_flannel
+from party.fabric import wool_flannel
 from party.meshing import rectangular_net
 from party.model import ModelBuilder
 from party.solvers import SolverExplicit

@@ -21,7 +21,8 @@ def write_mesh(path: Path, points: np.ndarray, faces: np.ndarray, uv: np.ndarray
     visual = trimesh.visual.TextureVisuals(uv=uv) if uv is not None and path.suffix == ".obj" else None
     mesh = trimesh.Trimesh(points, faces, process=False, visual=visual)
     tmp = path.with_name(path.name + ".part")
-    tmp.write_bytes(mesh.export(file_type=path.suffix[1:]) if path.suffix == ".ply" else mesh.export(file_type=path.suffix[1:]).encode())
+    data = mesh.export(file_type=path.suffix[1:])
+    tmp.write_bytes(data.encode() if isinstance(data, str) else data)
     os.replace(tmp, path)
 
 
