@@ -21,26 +21,44 @@ def _inside_and_distance(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_d
             inside[i] = 1
 
 
+class ColliderProbe:
+    """Inside and distance queries against colliders, their BVHs built once."""
+
+    def __init__(self, colliders, device: str = "cpu") -> None:
+        self.device = device
+        self.meshes = [
+            wp.Mesh(points=wp.array(c.vertices.astype(np.float32), dtype=wp.vec3, device=device),
+                    indices=wp.array(c.faces.ravel().astype(np.int32), dtype=int, device=device))
+            for c in colliders
+        ]
+
+    def inside_and_distance(self, points: np.ndarray, max_dist: float = 1.0e3) -> tuple[np.ndarray, np.ndarray]:
+        """For each point [m]: inside any (closed) collider? and its distance to the nearest
+        collider surface [m]."""
+        n = len(points)
+        pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=self.device)
+        inside = wp.zeros(n, dtype=int, device=self.device)
+        nearest = np.full(n, 1.0e30)
+        for mesh in self.meshes:
+            distance = wp.full(n, 1.0e30, dtype=float, device=self.device)
+            wp.launch(_inside_and_distance, dim=n, inputs=[mesh.id, pts, max_dist, inside, distance], device=self.device)
+            nearest = np.minimum(nearest, distance.numpy())
+        return inside.numpy().astype(bool), nearest
+
+    def penetrations(self, points: np.ndarray) -> int:
+        """Number of nodes inside any collider."""
+        return int(self.inside_and_distance(points)[0].sum())
+
+
 def collider_inside_and_distance(points: np.ndarray, collider: ColliderMesh, device: str = "cpu",
                                  max_dist: float = 1.0e3) -> tuple[np.ndarray, np.ndarray]:
     """For each point [m]: inside the (closed) collider? and its distance to the surface [m]."""
-    mesh = wp.Mesh(points=wp.array(collider.vertices.astype(np.float32), dtype=wp.vec3, device=device),
-                   indices=wp.array(collider.faces.ravel().astype(np.int32), dtype=int, device=device))
-    n = len(points)
-    inside = wp.zeros(n, dtype=int, device=device)
-    distance = wp.full(n, 1.0e30, dtype=float, device=device)
-    wp.launch(_inside_and_distance, dim=n,
-              inputs=[mesh.id, wp.array(points.astype(np.float32), dtype=wp.vec3, device=device), max_dist,
-                      inside, distance], device=device)
-    return inside.numpy().astype(bool), distance.numpy().astype(float)
+    return ColliderProbe([collider], device).inside_and_distance(points, max_dist)
 
 
 def body_penetrations(points: np.ndarray, colliders, device: str = "cpu") -> int:
     """Number of nodes inside any collider."""
-    inside = np.zeros(len(points), bool)
-    for c in colliders:
-        inside |= collider_inside_and_distance(points, c, device)[0]
-    return int(inside.sum())
+    return ColliderProbe(colliders, device).penetrations(points)
 
 
 @wp.func

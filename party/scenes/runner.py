@@ -21,7 +21,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from ..errors import InvalidInput, SimulationUnstable
 from ..output import images
 from ..output.frames import frame_path, load_checkpoint, save_checkpoint, write_json, write_mesh
-from ..output.metrics import body_penetrations, cloth_crossings, max_elongation
+from ..output.metrics import ColliderProbe, cloth_crossings, max_elongation
 from ..solvers.explicit.solver import critical_time_step
 from .scene import Scene
 
@@ -52,6 +52,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     host = model.host
     limited = host["element_params"][:, 3] < 1e29
     rest = host["element_params"][:, 0]
+    probe = ColliderProbe(colliders, model.device)
 
     state, scratch = model.state(), model.state()
     control = model.control()
@@ -76,7 +77,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
             stale.unlink()
         for c in colliders:
             write_mesh(out / "colliders" / f"{c.name}.ply", c.vertices, c.faces)
-        _record(out, 0, state.positions(), faces, model, colliders, limited, rest, totals)
+        _record(out, 0, state.positions(), faces, model, probe, limited, rest, totals)
         first_frame = 1
 
     summary = {
@@ -107,7 +108,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
                     f"simulation became unstable before t = {state.time:.4f} s (max node speed "
                     f"{speed:.3g} m/s); frames up to {frame - 1} are kept in {out / 'frames'}; "
                     f"try a smaller --dt, e.g. {_round_down(dt / 2):g}")
-            _record(out, frame, points, faces, model, colliders, limited, rest, totals)
+            _record(out, frame, points, faces, model, probe, limited, rest, totals)
             save_checkpoint(checkpoint, node_q=points.astype(np.float32), node_qd=state.velocities().astype(np.float32),
                             collider_q=state.collider_q.numpy(), collider_qd=state.collider_qd.numpy(),
                             time=state.time, frame=frame, **{k: v for k, v in totals.items()})
@@ -130,10 +131,10 @@ def _summary_numbers(totals: dict, frame: int, steps_per_frame: int, dt: float) 
     }
 
 
-def _record(out, frame, points, faces, model, colliders, limited, rest, totals) -> None:
+def _record(out, frame, points, faces, model, probe, limited, rest, totals) -> None:
     write_mesh(frame_path(out, frame), points, faces)
     totals["max_elongation"] = max(totals["max_elongation"], max_elongation(points, model.elements, rest, limited))
-    totals["body_penetrations"] += body_penetrations(points, colliders, model.device) if colliders else 0
+    totals["body_penetrations"] += probe.penetrations(points)
     totals["cloth_crossings"] += cloth_crossings(points, faces, model.device)
 
 
