@@ -17,6 +17,21 @@ CM = 1.0e-2
 MM = 1.0e-3
 """One millimetre in metres [m]."""
 
+INCH = 2.54e-2
+"""One inch in metres [m]."""
+
+LENGTH_UNITS = {"m": 1.0, "cm": CM, "mm": MM, "in": INCH}
+"""Length units accepted in pattern and body files, in metres."""
+
+
+def length_unit(name: str) -> float:
+    """Metres per unit of ``name`` (m, cm, mm, in)."""
+    from .errors import InvalidInput
+
+    if name not in LENGTH_UNITS:
+        raise InvalidInput(f"unknown length unit {name!r} (expected one of {', '.join(LENGTH_UNITS)})")
+    return LENGTH_UNITS[name]
+
 
 def areal_density_from_g_per_cm2(rho: float) -> float:
     """Mass per unit area: g/cm^2 -> kg/m^2 (x 10). Table 1's 0.023 g/cm^2 is 0.23 kg/m^2."""

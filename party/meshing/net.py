@@ -35,7 +35,13 @@ class ClothNet:
             is ``tensile_stiffness * width / rest_length`` and its damper's area share is
             ``width * rest_length``.
         triangles: Node triples, counter-clockwise in the uv plane, shape (t, 3), int.
-        shape: (columns, rows) of the grid the net was cut from.
+        shape: (columns, rows) of the grid the net was cut from ((0, 0) for cut panels).
+        warp_share: For warp and weft elements, the share cos^2(theta) of the warp's tensile
+            stiffness an element at angle theta to the warp takes (the rest comes from the
+            weft's); None means 1 for warp and 0 for weft elements (grid-aligned nets).
+        rest_lengths: Element rest lengths [m]; None means their lengths in ``uv``. Sewn
+            garments, whose merged seam nodes have one uv per panel, give them explicitly.
+        triangle_areas: Rest areas of the triangles [m^2]; None means their areas in ``uv``.
     """
 
     uv: np.ndarray
@@ -44,18 +50,38 @@ class ClothNet:
     widths: np.ndarray
     triangles: np.ndarray
     shape: tuple[int, int]
+    warp_share: np.ndarray | None = None
+    rest_lengths: np.ndarray | None = None
+    triangle_areas: np.ndarray | None = None
 
     @property
     def node_count(self) -> int:
         return len(self.uv)
 
-    def node_areas(self) -> np.ndarray:
-        """Lumped node areas [m^2]: each triangle gives a third of its area to each corner."""
+    def element_rest_lengths(self) -> np.ndarray:
+        """Rest length of each element [m]."""
+        if self.rest_lengths is not None:
+            return np.asarray(self.rest_lengths, float)
+        return np.linalg.norm(self.uv[self.elements[:, 1]] - self.uv[self.elements[:, 0]], axis=1)
+
+    def element_warp_share(self) -> np.ndarray:
+        """See ``warp_share``."""
+        if self.warp_share is not None:
+            return np.asarray(self.warp_share, float)
+        return (self.kinds == ElementKind.WARP).astype(float)
+
+    def rest_triangle_areas(self) -> np.ndarray:
+        """Rest area of each triangle [m^2]."""
+        if self.triangle_areas is not None:
+            return np.asarray(self.triangle_areas, float)
         p = self.uv[self.triangles]
         e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-        area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        return 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+
+    def node_areas(self) -> np.ndarray:
+        """Lumped node areas [m^2]: each triangle gives a third of its area to each corner."""
         out = np.zeros(self.node_count)
-        np.add.at(out, self.triangles.ravel(), np.repeat(area / 3.0, 3))
+        np.add.at(out, self.triangles.ravel(), np.repeat(self.rest_triangle_areas() / 3.0, 3))
         return out
 
 

@@ -58,6 +58,11 @@ class ModelBuilder:
     def node_count(self) -> int:
         return self._node_count
 
+    @property
+    def element_stiffness(self) -> np.ndarray:
+        """Spring constants [N/m] of the elements added so far."""
+        return np.concatenate([p[:, 1] for p in self._element_params]) if self._element_params else np.zeros(0)
+
     def add_node(self, point, mass: float, *, fabric: Fabric | None = None) -> int:
         """Add a lone node [m, kg]; ``fabric`` gives its collision parameters."""
         return int(self._add_nodes(np.asarray(point, float).reshape(1, 3), np.array([mass]), fabric)[0])
@@ -69,14 +74,21 @@ class ModelBuilder:
         ``stiffness`` is the spring constant e_ik [N/m], ``damping`` the damper [kg/s],
         ``rest_length`` l0 [m] (default: the current distance), ``strain_limit`` L_sh [-].
         """
-        for n in (i, k):
-            if not 0 <= n < self._node_count:
-                raise InvalidInput(f"element node index {n} out of range [0, {self._node_count})")
+        self.add_springs(np.array([[i, k]]), stiffness=stiffness, damping=damping,
+                         rest_length=rest_length, strain_limit=strain_limit)
+
+    def add_springs(self, pairs, *, stiffness, damping=0.0, rest_length=None, strain_limit=np.inf) -> None:
+        """Add elements between node ``pairs`` (m, 2) at once; the other arguments are scalars or
+        arrays of length m, as in :meth:`add_element` (sewing springs are added this way)."""
+        pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+        if pairs.size and (pairs.min() < 0 or pairs.max() >= self._node_count):
+            raise InvalidInput(f"element node index out of range [0, {self._node_count})")
+        m = len(pairs)
         if rest_length is None:
             pts = np.concatenate(self._points)
-            rest_length = float(np.linalg.norm(pts[k] - pts[i]))
-        self._push_elements(np.array([[i, k]]), np.array([rest_length]), np.array([stiffness]),
-                            np.array([damping]), np.array([strain_limit]))
+            rest_length = np.linalg.norm(pts[pairs[:, 1]] - pts[pairs[:, 0]], axis=1)
+        self._push_elements(pairs, *(np.broadcast_to(np.asarray(x, float), (m,)).copy()
+                                     for x in (rest_length, stiffness, damping, strain_limit)))
 
     def add_cloth(self, net: ClothNet, fabric: Fabric, points, *, name: str = "cloth") -> ClothRange:
         """Add a cloth cut from ``net`` in ``fabric``, its nodes placed at ``points`` [m].
@@ -91,10 +103,13 @@ class ModelBuilder:
         node_start, tri_start = self._node_count, self._triangle_count
         self._add_nodes(points, masses, fabric, uv=net.uv)
 
-        rest = np.linalg.norm(net.uv[net.elements[:, 1]] - net.uv[net.elements[:, 0]], axis=1)
+        rest = net.element_rest_lengths()
         tensile = {ElementKind.WARP: fabric.tensile_warp, ElementKind.WEFT: fabric.tensile_weft,
                    ElementKind.SHEAR: fabric.shear, ElementKind.BEND: fabric.bending}
         modulus = np.array([tensile[ElementKind(k)] for k in range(4)])[net.kinds]
+        share = net.element_warp_share()
+        in_plane = np.isin(net.kinds, [ElementKind.WARP, ElementKind.WEFT])
+        modulus = np.where(in_plane, share * fabric.tensile_warp + (1.0 - share) * fabric.tensile_weft, modulus)
         keep = modulus > 0.0
         limited = np.isin(net.kinds, [ElementKind.WARP, ElementKind.WEFT])
         self._push_elements(

@@ -7,47 +7,7 @@ import numpy as np
 import warp as wp
 
 from ..body.collider import ColliderMesh
-
-
-@wp.kernel
-def _inside_and_distance(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,
-                         inside: wp.array(dtype=int), distance: wp.array(dtype=float)):
-    i = wp.tid()
-    q = wp.mesh_query_point_sign_winding_number(mesh, points[i], max_dist)
-    if q.result:
-        p = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
-        distance[i] = wp.length(points[i] - p)
-        if q.sign < 0.0:
-            inside[i] = 1
-
-
-class ColliderProbe:
-    """Inside and distance queries against colliders, their BVHs built once."""
-
-    def __init__(self, colliders, device: str = "cpu") -> None:
-        self.device = device
-        self.meshes = [
-            wp.Mesh(points=wp.array(c.vertices.astype(np.float32), dtype=wp.vec3, device=device),
-                    indices=wp.array(c.faces.ravel().astype(np.int32), dtype=int, device=device))
-            for c in colliders
-        ]
-
-    def inside_and_distance(self, points: np.ndarray, max_dist: float = 1.0e3) -> tuple[np.ndarray, np.ndarray]:
-        """For each point [m]: inside any (closed) collider? and its distance to the nearest
-        collider surface [m]."""
-        n = len(points)
-        pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=self.device)
-        inside = wp.zeros(n, dtype=int, device=self.device)
-        nearest = np.full(n, 1.0e30)
-        for mesh in self.meshes:
-            distance = wp.full(n, 1.0e30, dtype=float, device=self.device)
-            wp.launch(_inside_and_distance, dim=n, inputs=[mesh.id, pts, max_dist, inside, distance], device=self.device)
-            nearest = np.minimum(nearest, distance.numpy())
-        return inside.numpy().astype(bool), nearest
-
-    def penetrations(self, points: np.ndarray) -> int:
-        """Number of nodes inside any collider."""
-        return int(self.inside_and_distance(points)[0].sum())
+from ..body.probe import ColliderProbe
 
 
 def collider_inside_and_distance(points: np.ndarray, collider: ColliderMesh, device: str = "cpu",

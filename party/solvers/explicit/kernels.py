@@ -52,6 +52,22 @@ def net_forces_and_velocity(
     v_out[i] = vi + (f * inv_mass[i] + gravity) * dt
 
 
+@wp.kernel
+def kinetic_damping(v_before: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), max_speed: float, keep: float):
+    """Relaxation's velocity filter (see :mod:`party.solvers.relax`): zero a node's velocity
+    where the step turned it against the velocity it had, cap speeds at ``max_speed`` [m/s],
+    and keep a fraction ``keep`` of the rest."""
+    i = wp.tid()
+    vi = v[i]
+    if wp.dot(vi, v_before[i]) < 0.0:
+        v[i] = wp.vec3(0.0)
+        return
+    speed = wp.length(vi)
+    if speed > max_speed:
+        vi = vi * (max_speed / speed)
+    v[i] = vi * keep
+
+
 @wp.func
 def end_of_step_span(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), i: int, k: int, dt: float) -> wp.vec3:
     """(r_k + v_k dt) - (r_i + v_i dt): the element's vector at the end of the step [m]."""

@@ -9,7 +9,7 @@ from ...collision import CollisionPipeline, CollisionSettings
 from ...errors import InvalidInput
 from ...model import Control, Model, State
 from ..aero import Air, AirForces
-from .kernels import advance_positions, count_over_limit, net_forces_and_velocity, plastic_limit
+from .kernels import advance_positions, count_over_limit, kinetic_damping, net_forces_and_velocity, plastic_limit
 
 
 class SolverExplicit:
@@ -29,11 +29,15 @@ class SolverExplicit:
         air: Wind and air drag (see :mod:`party.solvers.aero`); ``None`` for none.
         plastic_passes: Most sweeps over the element colours per step enforcing the plastic
             limit (sweeps stop as soon as no element is beyond it).
+        kinetic_damping: ``(max_speed [m/s], keep [-])`` to filter v* for static relaxation
+            (:mod:`party.solvers.relax`); None for dynamics.
     """
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
-                 air: Air | None = None, plastic_passes: int = 32) -> None:
+                 air: Air | None = None, plastic_passes: int = 32,
+                 kinetic_damping: tuple[float, float] | None = None) -> None:
         self.model = model
+        self.kinetic_damping = kinetic_damping
         self.collision = CollisionPipeline(model, collision) if collision is not None else None
         self.air = AirForces(model, air) if air is not None else None
         self.plastic_passes = plastic_passes
@@ -79,6 +83,9 @@ class SolverExplicit:
                           m.node_element_ids, m.element_nodes, m.element_rest_length, m.element_stiffness,
                           m.element_damping, self._f_ext, m.gravity, control.kinematic_velocity, dt],
                   outputs=[state_out.node_q, state_out.node_qd], device=dev)
+        if self.kinetic_damping is not None:
+            wp.launch(kinetic_damping, dim=m.node_count,
+                      inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=dev)
         if self._has_limit:
             self._apply_plastic_limit(state_out, dt)
         wp.copy(state_out.collider_q, state_in.collider_q)
