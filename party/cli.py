@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 from rich.console import Console
 
-from .errors import PartyError
+from .errors import InvalidInput, PartyError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="PARTY dress simulator: the paper's experiments and garment draping.")
@@ -34,20 +34,58 @@ def run_command(
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step [s] (the paper: 1e-4)."),
     wind: Optional[float] = typer.Option(None, "--wind", help="Wind speed [m/s] (rod-wind)."),
     device: Optional[str] = typer.Option(None, "--device", help="cpu, cuda or auto (default: cuda if present)."),
+    quick: bool = typer.Option(False, "--quick", help="Coarse and short: a fast check (CI)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/checkpoint.npz."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
 ) -> None:
     """Run a scene and write its frames, images and summary.json."""
+    import inspect
+
     from .scenes import scene_by_name
     from .scenes.runner import run_scene
 
-    options = {"duration": duration, "spacing": spacing, "dt": dt, "wind_speed": wind, "device": device}
     build = scene_by_name(scene)
-    built = build(**{k: v for k, v in options.items() if v is not None})
+    options = {"duration": duration, "spacing": spacing, "dt": dt, "wind_speed": wind, "device": device,
+               "quick": quick or None, "progress": progress}
+    accepted = inspect.signature(build).parameters
+    for name, value in options.items():
+        if value is not None and value is not False and name not in accepted and name != "progress":
+            raise InvalidInput(f"scene {scene!r} has no option --{name.replace('_speed', '')}")
+    built = build(**{k: v for k, v in options.items() if v is not None and k in accepted})
     summary = run_scene(built, out_dir, resume=resume, progress=progress)
     out.print(f"{scene}: {summary['nodes']} nodes, {summary['steps']} steps, {summary['simulated_seconds']:.3f} s "
               f"simulated in {summary['wall_seconds']:.1f} s; max elongation {summary['max_elongation']:.4f}, "
               f"body penetrations {summary['body_penetrations']}, cloth crossings {summary['cloth_crossings']}")
+    out.print(f"results in {out_dir}/")
+
+
+@app.command("drape")
+def drape_command(
+    pattern: Path = typer.Argument(..., help="Pattern file: our JSON, GarmentCode JSON or DXF-AAMA (.dxf)."),
+    body: str = typer.Option("M", "--body", help="Body: a dress-form size (S, M, L) or a mesh file (OBJ/PLY/STL/glTF)."),
+    fabric: str = typer.Option("wool_flannel", "--fabric", help="Fabric preset name."),
+    out_dir: Path = typer.Option(..., "--out", help="Output folder (garment.obj/.glb, body.obj, images/, summary.json)."),
+    spacing_mm: float = typer.Option(20.0, "--spacing-mm", help="Node spacing of the net [mm] (resolution)."),
+    units: Optional[str] = typer.Option(None, "--units", help="Units of a DXF pattern (m, cm, mm, in) if its header has none."),
+    body_units: Optional[str] = typer.Option(None, "--body-units", help="Units of the body mesh (default: detected from its height)."),
+    up: Optional[str] = typer.Option(None, "--up", help="Up axis of the body mesh: x, y or z (default: its longest extent)."),
+    seams: Optional[Path] = typer.Option(None, "--seams", help="Seams side file for a DXF pattern (default: PATTERN.seams.json)."),
+    device: Optional[str] = typer.Option(None, "--device", help="cpu, cuda or auto."),
+    images: bool = typer.Option(True, "--images/--no-images", help="Render front, side and back views."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show progress bars."),
+) -> None:
+    """Sew a pattern onto a body and drape it under gravity."""
+    from .fabric import fabric_by_name
+    from .scenes.drape import drape
+
+    if not (spacing_mm > 0):
+        raise InvalidInput(f"--spacing-mm must be positive, got {spacing_mm}")
+    summary = drape(pattern, body, fabric_by_name(fabric), out_dir, spacing=spacing_mm / 1000.0, device=device,
+                    pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,
+                    progress=progress)
+    out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
+              f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']}, "
+              f"cloth crossings {summary['cloth_crossings']}, {summary['wall_seconds']:.0f} s")
     out.print(f"results in {out_dir}/")
 
 

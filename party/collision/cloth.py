@@ -12,9 +12,12 @@ MAX_CONTACTS = 4
 
 
 @wp.func
-def is_neighbor(i: int, n: int, offsets: wp.array(dtype=int), neighbors: wp.array(dtype=int)) -> bool:
+def is_neighbor(i: int, n: int, offsets: wp.array(dtype=int), neighbors: wp.array(dtype=int), ring: int) -> bool:
+    """Whether node n is node i (ring 0) or one of its mesh neighbours (ring 1)."""
     if i == n:
         return True
+    if ring == 0:
+        return False
     for j in range(offsets[i], offsets[i + 1]):
         if neighbors[j] == n:
             return True
@@ -34,6 +37,7 @@ def gather_cloth_triangles(
     nbr_offsets: wp.array(dtype=int),
     nbrs: wp.array(dtype=int),
     lists: IntervalLists,
+    ring: int,
     dt: float,
     margin: float,
     out: wp.array(dtype=int, ndim=2),
@@ -43,8 +47,8 @@ def gather_cloth_triangles(
 ):
     """The interval-list search of section 6.1 against the cloth's own triangles: the box
     spanned by r and r + dr grown by eps and a margin, walked on the axis with the fewest
-    entries. Triangles holding the node or one of its mesh neighbours are left out (section
-    6.3); the nearest MAX_CANDIDATES others are kept for the following steps (the count of
+    entries. Triangles holding the node (and, with ``ring`` 1, those holding one of its mesh
+    neighbours, section 6.3) are left out; the nearest MAX_CANDIDATES others are kept for the following steps (the count of
     farther ones dropped goes to ``overflow``)."""
     i = wp.tid()
     x0 = x[i]
@@ -66,7 +70,7 @@ def gather_cloth_triangles(
             ta = tris[t, 0]
             tb = tris[t, 1]
             tc = tris[t, 2]
-            if is_neighbor(i, ta, nbr_offsets, nbrs) or is_neighbor(i, tb, nbr_offsets, nbrs) or is_neighbor(i, tc, nbr_offsets, nbrs):
+            if is_neighbor(i, ta, nbr_offsets, nbrs, ring) or is_neighbor(i, tb, nbr_offsets, nbrs, ring) or is_neighbor(i, tc, nbr_offsets, nbrs, ring):
                 continue
             w = closest_point_barycentric(x0, x[ta], x[tb], x[tc])
             dist = wp.length(x0 - interpolate(w, x[ta], x[tb], x[tc]))

@@ -31,6 +31,10 @@ class CollisionSettings:
             remembered and the search is repeated only once some node has moved half this
             far, so a larger margin means fewer searches but more candidates.
         max_cells: Largest number of intervals per axis in the interval lists.
+        exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
+            (the node may not fold through its neighbours' triangles, which keeps sharp folds
+            of a coarse net from crossing themselves); 1, also those holding one of its mesh
+            neighbours (needed while sewing, where a node must reach its partner's triangles).
     """
 
     body: bool = True
@@ -38,6 +42,7 @@ class CollisionSettings:
     passes: int = 3
     search_margin: float = 4.0e-3
     max_cells: int = 256
+    exclude_ring: int = 0
 
 
 class CollisionPipeline:
@@ -131,7 +136,7 @@ class CollisionPipeline:
             self.cloth_lists.build_checked(x, v, dt, half)
             wp.launch(gather_cloth_triangles, dim=m.node_count,
                       inputs=[x, v, m.node_thickness, m.triangle_nodes, m.node_neighbor_offsets, m.node_neighbors,
-                              self.cloth_lists.lists, dt, half, self.cloth_candidates,
+                              self.cloth_lists.lists, int(self.settings.exclude_ring), dt, half, self.cloth_candidates,
                               self.cloth_candidate_count, self._candidate_distance, self._overflow], device=dev)
         wp.copy(self._x_ref, x)
         self._flag.zero_()

@@ -45,6 +45,10 @@ class Garment:
     def panel_of_node(self) -> np.ndarray:
         return np.repeat(np.arange(len(self.panels)), np.diff(self.node_offsets))
 
+    def triangle_panel(self) -> np.ndarray:
+        """Panel index of each triangle."""
+        return np.repeat(np.arange(len(self.panels)), [len(p.net.triangles) for p in self.panels])
+
     def quality(self) -> dict:
         """Worst mesh quality over the panels (see :class:`PanelMesh`)."""
         qs = [p.quality for p in self.panels]

@@ -27,6 +27,9 @@ BOUNDARY_CLEARANCE = 0.6
 
 MAX_NODES_PER_PANEL = 400_000
 
+BIAS_FLOOR = 0.05
+"""Smallest share of its straight-grain stiffness an off-grain side near the outline keeps."""
+
 
 @dataclass(frozen=True)
 class PanelMesh:
@@ -146,10 +149,15 @@ def _elements(uv, triangles, is_grid, ij):
     diagonal = grid & (step[:, 0] == 1) & (step[:, 1] == 1)
     kinds = np.where(cos2 >= 0.5, ElementKind.WARP, ElementKind.WEFT)
     kinds = np.where(diagonal, ElementKind.SHEAR, kinds).astype(np.int32)
-    share = np.where(grid & ~diagonal, (kinds == ElementKind.WARP).astype(float), cos2)
+    aligned = grid & ~diagonal & ((step[:, 0] + step[:, 1]) == 1)
+    share = np.where(aligned, (kinds == ElementKind.WARP).astype(float), cos2)
     # A side's width: the fabric area of its triangles per unit length; a grid diagonal splits
-    # its quad, so it stands for half the quad's diagonal (as in the rectangular net).
-    widths = np.where(diagonal, 0.5 * length, tri_area / length)
+    # its quad, so it stands for half the quad's diagonal (as in the rectangular net). A side
+    # off the grain near the outline stands in for the warp and weft threads it crosses, which
+    # resist its stretch only in proportion to cos^2(2 theta): a net of warp and weft alone
+    # gives no resistance on the bias (45 degrees), and neither do these sides.
+    bias = np.maximum((2.0 * cos2 - 1.0) ** 2, BIAS_FLOOR)
+    widths = np.where(diagonal, 0.5 * length, tri_area / length * np.where(aligned, 1.0, bias))
     return elements.astype(np.int32), kinds, widths, share
 
 

@@ -46,7 +46,7 @@ def _segment_hits_triangle(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp
 
 @wp.kernel
 def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
-                    edges: wp.array(dtype=wp.vec2i), count: wp.array(dtype=int)):
+                    edges: wp.array(dtype=wp.vec2i), count: wp.array(dtype=int), crossed: wp.array(dtype=int)):
     e = wp.tid()
     i = edges[e][0]
     k = edges[e][1]
@@ -64,21 +64,28 @@ def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.a
             continue
         if _segment_hits_triangle(p, q, points[a], points[b], points[c]):
             wp.atomic_add(count, 0, 1)
+            crossed[e] = 1
 
 
 def cloth_crossings(points: np.ndarray, triangles: np.ndarray, device: str = "cpu") -> int:
     """Number of (mesh edge, triangle) pairs of the cloth that pass through each other, edges and
     triangles sharing a node excluded: zero when no layer crosses another."""
+    return crossing_edges(points, triangles, device)[0]
+
+
+def crossing_edges(points: np.ndarray, triangles: np.ndarray, device: str = "cpu") -> tuple[int, np.ndarray]:
+    """The crossing count of :func:`cloth_crossings` and the node pairs of the crossing edges."""
     if len(triangles) == 0:
-        return 0
+        return 0, np.zeros((0, 2), int)
     edges = np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1), axis=0)
     pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=device)
     mesh = wp.Mesh(points=pts, indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
     count = wp.zeros(1, dtype=int, device=device)
+    crossed = wp.zeros(len(edges), dtype=int, device=device)
     wp.launch(_edge_crossings, dim=len(edges),
               inputs=[mesh.id, pts, wp.array(triangles.astype(np.int32), dtype=int, device=device),
-                      wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=device), count], device=device)
-    return int(count.numpy()[0])
+                      wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=device), count, crossed], device=device)
+    return int(count.numpy()[0]), edges[crossed.numpy().astype(bool)]
 
 
 def max_elongation(points: np.ndarray, elements: np.ndarray, rest_length: np.ndarray, limited: np.ndarray) -> float:

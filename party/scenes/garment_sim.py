@@ -8,6 +8,7 @@ merged, so the garment becomes one connected net whose rest lengths are the flat
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -74,12 +75,15 @@ def garment_model(net: ClothNet, fabric: Fabric, points: np.ndarray, body: Body,
 
 
 def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = None, max_iterations: int = 6000,
-        on_log=None) -> Sewn:
-    """Place ``garment`` around ``body``, sew it closed and return the sewn garment."""
+        progress: bool = False) -> Sewn:
+    """Place ``garment`` around ``body``, sew it closed and return the sewn garment.
+
+    Two relaxations: the panels pulled together by sewing springs (plastic limit off, so that
+    seams can close before the cloth has slid into place), then the joined garment with its
+    plastic limit on, so that the dynamics start from a net within its limits."""
     start = dress(garment, body, device=device or "cpu")
     builder = ModelBuilder(gravity=(0.0, 0.0, 0.0))
-    sewing_fabric = fabric.with_(friction=0.0, strain_limit=float("inf"))
-    builder.add_cloth(garment.net, sewing_fabric, start, name="panels")
+    builder.add_cloth(garment.net, fabric.with_(friction=0.0, strain_limit=float("inf")), start, name="panels")
     net, node_map = garment.sewn()
     pairs = sewing_pairs(node_map)
     if len(pairs):
@@ -89,12 +93,11 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
         builder.add_collider(collider)
     model = builder.finalize(device)
     dt = 0.8 * critical_time_step(model)
-    solver = SolverRelax(model, collision=CollisionSettings(), max_speed=4.0, momentum=MOMENTUM)
     state = model.state()
-    result = solver.relax(state, dt, max_iterations=max_iterations, min_iterations=400, on_log=on_log)
-    points = state.positions()
-    if not np.all(np.isfinite(points)):
-        raise SimulationUnstable("sewing blew up (non-finite positions); try a coarser --spacing")
+    with relax_progress("sewing", max_iterations, progress) as on_log:
+        result = SolverRelax(model, collision=CollisionSettings(exclude_ring=1), max_speed=4.0, momentum=MOMENTUM).relax(
+            state, dt, max_iterations=max_iterations, min_iterations=400, on_log=on_log)
+    points = _finite(state.positions())
     sp = garment.seam_pairs
     pair_gap = np.linalg.norm(points[sp[:, 0]] - points[sp[:, 1]], axis=1)
     seam_gaps = np.zeros(len(garment.pattern.seams))
@@ -102,9 +105,24 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     merged = np.zeros((net.node_count, 3))
     np.add.at(merged, node_map, points)
     merged /= np.bincount(node_map, minlength=net.node_count)[:, None]
-    return Sewn(garment, net, node_map, merged, seam_gaps, result, dt)
+
+    joined = garment_model(net, fabric.with_(friction=0.0), merged, body, gravity=False, device=device)
+    state = joined.state()
+    settle = max(max_iterations // 4, 200)
+    with relax_progress("settling seams", settle, progress) as on_log:
+        tail = SolverRelax(joined, max_speed=1.0).relax(state, 0.8 * critical_time_step(joined),
+                                                        max_iterations=settle, min_iterations=100, on_log=on_log)
+    last = result.iterations
+    result.energy += [(last + it, e) for it, e in tail.energy]
+    result.iterations = last + tail.iterations
+    result.converged = tail.converged
+    return Sewn(garment, net, node_map, _finite(state.positions()), seam_gaps, result, dt)
 
 
+def _finite(points: np.ndarray) -> np.ndarray:
+    if not np.all(np.isfinite(points)):
+        raise SimulationUnstable("sewing blew up (non-finite positions); try a coarser --spacing")
+    return points
 
 def sewing_pairs(node_map: np.ndarray) -> np.ndarray:
     """Every pair of garment nodes that sew into one node (where three or four panels meet, each
@@ -114,3 +132,20 @@ def sewing_pairs(node_map: np.ndarray) -> np.ndarray:
     groups = np.split(order, np.flatnonzero(np.diff(node_map[order])) + 1)
     pairs = [(a, b) for g in groups if len(g) > 1 for i, a in enumerate(g) for b in g[i + 1:]]
     return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+
+
+@contextmanager
+def relax_progress(label: str, total: int, show: bool):
+    """A progress bar for a relaxation; yields the ``on_log`` callback to hand to it."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    bar = Progress(TextColumn(f"[bold]{label}[/]"), BarColumn(), TextColumn("{task.completed} iterations"),
+                   TextColumn("energy {task.fields[energy]:.4g} J"), TimeElapsedColumn(), disable=not show)
+    with bar:
+        task = bar.add_task(label, total=total, energy=float("nan"))
+
+        def on_log(iteration: int, energy: float, state) -> None:
+            bar.update(task, completed=iteration, energy=energy)
+
+        yield on_log
+        bar.update(task, total=bar.tasks[0].completed)

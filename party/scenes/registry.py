@@ -5,10 +5,11 @@ from __future__ import annotations
 from typing import Callable
 
 from ..errors import InvalidInput
-from . import rod_wind
+from . import dress, rod_wind
 
 SCENES: dict[str, tuple[Callable, str]] = {
     "rod-wind": (rod_wind.build, "Experiment 1: cloth over a rod in a cross wind (figure 11)"),
+    "dress": (dress.build, "Experiment 2: a one-piece dress with sleeves on the dress form (figures 12-14)"),
 }
 
 

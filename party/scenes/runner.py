@@ -83,7 +83,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     summary = {
         "scene": scene.name, "status": "running", "nodes": model.node_count, "triangles": model.triangle_count,
         "dt": dt, "critical_dt": critical, "device": model.device, "steps": 0, "simulated_seconds": 0.0,
-        "frames": first_frame, "parameters": scene.parameters,
+        "frames": first_frame, "parameters": scene.parameters, **scene.summary,
     }
     bar = Progress(TextColumn(f"[bold]{scene.name}[/]"), BarColumn(), TextColumn("{task.completed}/{task.total} frames"),
                    TextColumn("t={task.fields[t]:.3f} s"), TimeElapsedColumn(), TimeRemainingColumn(),
@@ -118,7 +118,11 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
 
     summary["status"] = "finished"
     write_json(summary_path, summary)
-    _pictures(out, scene, frames_total, faces, colliders)
+    if scene.pictures is not None:
+        times = [(k * steps_per_frame * dt, frame_path(out, k)) for k in range(frames_total + 1)]
+        scene.pictures(out, times)
+    else:
+        _pictures(out, scene, frames_total, faces, colliders)
     return summary
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 from ..model import Model
@@ -22,6 +23,9 @@ class Scene:
         wind: Air velocity [m/s] as a function of time [s], or None for still air.
         view: Camera for pictures: matplotlib ``elev`` and ``azim`` [degrees].
         parameters: Scene settings echoed into ``summary.json``.
+        summary: Further entries for ``summary.json`` known before the run (set-up results).
+        pictures: ``pictures(out, frames)`` draws the run's pictures from the written frames
+            (``frames``: list of (time [s], frame path)); None for the runner's default.
     """
 
     name: str
@@ -33,3 +37,5 @@ class Scene:
     wind: Callable[[float], tuple[float, float, float]] | None = None
     view: dict = field(default_factory=lambda: {"elev": 15.0, "azim": -60.0})
     parameters: dict = field(default_factory=dict)
+    summary: dict = field(default_factory=dict)
+    pictures: Callable[[Path, list], None] | None = None

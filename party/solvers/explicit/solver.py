@@ -12,6 +12,10 @@ from ..aero import Air, AirForces
 from .kernels import advance_positions, count_over_limit, kinetic_damping, net_forces_and_velocity, plastic_limit
 
 
+PLASTIC_TOLERANCE = 1.0e-3
+"""Relative length beyond the plastic limit left to the next step's sweeps (0.1 %)."""
+
+
 class SolverExplicit:
     """Symplectic Euler on the elastic net with collision as a velocity filter:
 
@@ -34,7 +38,7 @@ class SolverExplicit:
     """
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
-                 air: Air | None = None, plastic_passes: int = 32,
+                 air: Air | None = None, plastic_passes: int = 16,
                  kinetic_damping: tuple[float, float] | None = None) -> None:
         self.model = model
         self.kinetic_damping = kinetic_damping
@@ -53,7 +57,7 @@ class SolverExplicit:
 
     def _apply_plastic_limit(self, state: State, dt: float) -> None:
         """Gauss-Seidel sweeps over the element colours until no element would end the step
-        beyond its limit (to a relative 1e-6), at most ``plastic_passes`` sweeps. Reads one
+        beyond its limit (to :data:`PLASTIC_TOLERANCE`), at most ``plastic_passes`` sweeps. Reads one
         counter from the device per sweep; no sweep runs while the net is within its limits."""
         m = self.model
         offsets = m.element_color_offsets
@@ -61,7 +65,7 @@ class SolverExplicit:
             self._over_limit.zero_()
             wp.launch(count_over_limit, dim=m.element_count,
                       inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes, m.element_max_length,
-                              dt, 1.0e-6, self._over_limit], device=m.device)
+                              dt, PLASTIC_TOLERANCE, self._over_limit], device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 return
             for c in range(len(offsets) - 1):
