@@ -81,14 +81,18 @@ def _side_file(path: Path, seams_file: Path | None) -> dict:
         raise InvalidInput(f"{candidate}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
 
 
+def _xy(point) -> tuple[float, float]:
+    return float(point[0]), float(point[1])
+
+
 def _points(entity) -> np.ndarray:
     kind = entity.dxftype()
     if kind == "LWPOLYLINE":
         return np.asarray([p[:2] for p in entity.get_points("xy")], float)
     if kind == "POLYLINE":
-        return np.asarray([v.dxf.location[:2] for v in entity.vertices], float)
+        return np.asarray([_xy(v.dxf.location) for v in entity.vertices], float)
     if kind == "LINE":
-        return np.asarray([entity.dxf.start[:2], entity.dxf.end[:2]], float)
+        return np.asarray([_xy(entity.dxf.start), _xy(entity.dxf.end)], float)
     return np.zeros((0, 2))
 
 
@@ -105,7 +109,7 @@ def _piece(block, block_name: str, scale: float, path: Path) -> Panel:
         elif layer == GRAIN_LAYER:
             grain = _points(e)
         elif layer == TURN_LAYER and e.dxftype() == "POINT":
-            turns.append(np.asarray(e.dxf.location[:2], float))
+            turns.append(np.asarray(_xy(e.dxf.location), float))
     where = f"{path}: piece {name!r}"
     if outline is None or len(outline) < 3:
         raise InvalidInput(f"{where}: no cut line (a polyline on layer 1 with at least 3 points)")

@@ -71,7 +71,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
         "cloth_crossings": cloth_crossings(points, model.triangles, model.device),
         "max_elongation": max_elongation(points, host["elements"], host["element_params"][:, 0], limited),
         "relaxation": {
-            "sewing_iterations": sewn.relaxation.iterations, "draping_iterations": draped.iterations,
+            "sewing_iterations": sewn.relaxation.iterations + sewn.settling.iterations, "draping_iterations": draped.iterations,
             "converged": bool(draped.converged), "final_energy_J": draped.final_energy,
         },
         "mesh_quality": garment.quality(),

@@ -51,8 +51,9 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float = 1.0e-4, dev
         parameters={"spacing": spacing, "duration": duration, "dt": dt, "fabric": fabric.name, "body": body.name,
                     "quick": quick},
         summary={"seams": len(garment.pattern.seams), "max_seam_gap_mm": round(1000 * sewn.max_seam_gap, 3),
-                 "relaxation": {"iterations": sewn.relaxation.iterations, "converged": sewn.relaxation.converged,
-                                "final_energy_J": sewn.relaxation.final_energy, "dt": sewn.dt},
+                 "relaxation": {"iterations": sewn.relaxation.iterations + sewn.settling.iterations,
+                                "converged": sewn.settling.converged,
+                                "final_energy_J": sewn.settling.final_energy, "dt": sewn.dt},
                  "mesh_quality": garment.quality()},
     )
     scene.pictures = lambda out, frames: _pictures(out, frames, sewn, body, scene, quick)
@@ -63,9 +64,10 @@ def _pictures(out: Path, frames: list, sewn, body, scene: Scene, quick: bool) ->
     """Figures 12-14 and the sleeve-fall animation, under ``out/images``."""
     images = out / "images"
     garment = sewn.garment
-    write_json(out / "relaxation.json", {"energy_J": sewn.relaxation.energy})
+    write_json(out / "relaxation.json", {"sewing_energy_J": sewn.relaxation.energy,
+                                         "settling_energy_J": sewn.settling.energy})
     tri, panel, corners = sewn.net.triangles, garment.triangle_panel(), garment.corner_xy
-    size = 512 if quick else 1024
+    size = 1024
 
     def points(path: Path) -> np.ndarray:
         return np.asarray(trimesh.load(path, process=False).vertices)

@@ -46,7 +46,8 @@ class Sewn:
         points: Sewn node positions [m].
         seam_gaps: Per pattern seam, the largest distance [m] between its paired nodes when
             they were merged.
-        relaxation: The sewing relaxation's log.
+        relaxation: The sewing relaxation's log (panels and sewing springs).
+        settling: The log of the joined garment's relaxation that follows (plastic limit on).
         dt: Pseudo time step of the relaxation [s].
     """
 
@@ -56,6 +57,7 @@ class Sewn:
     points: np.ndarray
     seam_gaps: np.ndarray
     relaxation: RelaxResult
+    settling: RelaxResult
     dt: float
 
     @property
@@ -112,11 +114,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     with relax_progress("settling seams", settle, progress) as on_log:
         tail = SolverRelax(joined, max_speed=1.0).relax(state, 0.8 * critical_time_step(joined),
                                                         max_iterations=settle, min_iterations=100, on_log=on_log)
-    last = result.iterations
-    result.energy += [(last + it, e) for it, e in tail.energy]
-    result.iterations = last + tail.iterations
-    result.converged = tail.converged
-    return Sewn(garment, net, node_map, _finite(state.positions()), seam_gaps, result, dt)
+    return Sewn(garment, net, node_map, _finite(state.positions()), seam_gaps, result, tail, dt)
 
 
 def _finite(points: np.ndarray) -> np.ndarray:
