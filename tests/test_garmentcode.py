@@ -33,3 +33,44 @@ def test_sample_loads_meshes_and_pairs_its_seams(path):
     # Y-up to Z-up turn, so y < 0 after it)
     fronts = [p for n, p in pattern.panels.items() if "ftorso" in n or "_f" in n[-3:]]
     assert all(p.placement.translation[1] < 0 for p in fronts)
+
+
+@pytest.fixture(scope="module")
+def pencil_drape(tmp_path_factory):
+    import subprocess
+    import sys
+
+    out = tmp_path_factory.mktemp("pencil") / "out"
+    run = subprocess.run([sys.executable, "-m", "party.cli", "drape", str(DATA / "patterns" / "dress_pencil_specification.json"),
+                          "--body", str(DATA / "bodies" / "mean_all.obj"), "--spacing-mm", "30", "--out", str(out),
+                          "--no-progress"], capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    import json
+
+    return out, json.loads((out / "summary.json").read_text())
+
+
+def test_pencil_dress_drapes_on_mean_all_with_closed_seams(pencil_drape):
+    _, summary = pencil_drape
+    assert summary["body_penetrations"] == 0
+    assert summary["max_seam_gap_mm"] < 2.0
+    assert summary["panels"] == 6 and summary["seams"] == 23
+
+
+def test_drape_outputs_are_in_the_bodys_frame_with_uvs(pencil_drape):
+    import trimesh
+
+    out, summary = pencil_drape
+    body = trimesh.load(out / "body.obj", process=False)
+    source = trimesh.load(DATA / "bodies" / "mean_all.obj", process=False)
+    assert np.allclose(body.vertices, source.vertices, atol=1e-5)
+    garment = trimesh.load(out / "garment.obj", process=False)
+    assert garment.visual.uv.shape == (len(garment.vertices), 2)
+    lo, hi = source.bounds
+    assert np.all(garment.vertices.min(axis=0) > lo - 0.2) and np.all(garment.vertices.max(axis=0) < hi + 0.2)
+    # the skirt hangs down the body's Y axis, below the waist
+    assert garment.vertices[:, 1].min() < 0.7
+    glb = trimesh.load(out / "garment.glb", force="mesh", process=False)
+    assert len(glb.faces) == len(garment.faces)
+    for view in ("front", "side", "back"):
+        assert (out / "images" / f"{view}.png").exists()

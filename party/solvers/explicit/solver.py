@@ -12,8 +12,8 @@ from ..aero import Air, AirForces
 from .kernels import advance_positions, count_over_limit, kinetic_damping, net_forces_and_velocity, plastic_limit
 
 
-PLASTIC_TOLERANCE = 1.0e-3
-"""Relative length beyond the plastic limit left to the next step's sweeps (0.1 %)."""
+PLASTIC_TOLERANCE = 5.0e-5
+"""Relative length beyond the plastic limit left to the next step's sweeps (0.005 %)."""
 
 
 class SolverExplicit:
@@ -38,7 +38,7 @@ class SolverExplicit:
     """
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
-                 air: Air | None = None, plastic_passes: int = 16,
+                 air: Air | None = None, plastic_passes: int = 32,
                  kinetic_damping: tuple[float, float] | None = None) -> None:
         self.model = model
         self.kinetic_damping = kinetic_damping
