@@ -28,7 +28,6 @@ class Body:
             ``top``; ``shoulder_half_width`` [m] (centre to shoulder point).
         axis: (x, y) of the torso's vertical axis [m].
         to_source: Rotation (3, 3) taking our frame to the file's frame.
-        source_scale: File units per metre (1 for metres, 100 for centimetres, ...).
     """
 
     name: str
@@ -36,7 +35,6 @@ class Body:
     landmarks: dict
     axis: tuple[float, float] = (0.0, 0.0)
     to_source: np.ndarray = field(default_factory=lambda: np.eye(3))
-    source_scale: float = 1.0
 
     def vertices(self) -> np.ndarray:
         return np.concatenate([c.vertices for c in self.colliders])

@@ -70,7 +70,7 @@ def load_body(spec: str | Path, *, units: str | None = None, up: str | None = No
     axis_sel = np.abs(points[:, 2] - marks["waist"]) < 0.05
     axis = tuple(np.median(points[axis_sel, :2], axis=0)) if axis_sel.any() else (0.0, 0.0)
     return Body(path.stem, (collider,), marks, axis=(float(axis[0]), float(axis[1])),
-                to_source=rotation.T, source_scale=1.0 / scale)
+                to_source=rotation.T)
 
 
 def _detect_scale(stature: float, path: Path) -> float:

@@ -42,9 +42,6 @@ class Garment:
     def node_count(self) -> int:
         return int(self.node_offsets[-1])
 
-    def panel_of_node(self) -> np.ndarray:
-        return np.repeat(np.arange(len(self.panels)), np.diff(self.node_offsets))
-
     def triangle_panel(self) -> np.ndarray:
         """Panel index of each triangle."""
         return np.repeat(np.arange(len(self.panels)), [len(p.net.triangles) for p in self.panels])
@@ -121,7 +118,6 @@ def assemble(pattern: Pattern, spacing: float) -> Garment:
 
     nets = [m.net for m in meshes]
     shift = np.asarray(offsets[:-1])
-    tri_counts = [len(n.triangles) for n in nets]
     net = ClothNet(
         uv=np.concatenate([n.uv for n in nets]),
         elements=np.concatenate([n.elements + s for n, s in zip(nets, shift)]).astype(np.int32),
@@ -132,6 +128,5 @@ def assemble(pattern: Pattern, spacing: float) -> Garment:
         warp_share=np.concatenate([n.element_warp_share() for n in nets]),
     )
     corner_xy = np.concatenate([m.xy[m.net.triangles] for m in meshes])
-    assert len(corner_xy) == sum(tri_counts)
     return Garment(pattern, float(spacing), tuple(meshes), np.asarray(offsets), net, pairs.astype(np.int64),
                    owner, corner_xy)

@@ -119,6 +119,14 @@ class GarmentRenderer:
         self.plotter.close()
 
 
+def framing(points: np.ndarray, distance_factor: float) -> dict:
+    """Camera keywords for :meth:`GarmentRenderer.render` and :meth:`GarmentRenderer.image` that
+    look at the centre of ``points`` [m] from ``distance_factor`` times their largest extent,
+    so that a series of pictures shares one camera."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return {"target": 0.5 * (lo + hi), "distance": distance_factor * float((hi - lo).max())}
+
+
 def tile(images: list[np.ndarray], labels: list[str], path: Path, columns: int = 4) -> None:
     """Put equally sized images in a labelled grid and save it as PNG."""
     from PIL import Image, ImageDraw

@@ -183,7 +183,7 @@ def arc_through_radius(start, end, radius: float, *, large_arc: bool, ccw: bool,
     chord = end - start
     half = 0.5 * float(np.hypot(*chord))
     if not (np.isfinite(radius) and radius > 0 and half > 0):
-        raise InvalidInput(f"arc {name or ''} needs a positive radius and distinct end points".replace("  ", " "))
+        raise InvalidInput(f"arc{' ' + name if name else ''} needs a positive radius and distinct end points")
     radius = max(radius, half)  # SVG scales up a radius too small to span the chord
     height = np.sqrt(max(radius**2 - half**2, 0.0))
     left = np.array([-chord[1], chord[0]]) / (2 * half)

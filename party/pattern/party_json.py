@@ -113,28 +113,3 @@ def _split_ranges(panels: dict[str, Panel], seams: list[dict], source: str):
         refs.append(EdgeRef(name, new_index[(name, k, lo)]))
     return panels, refs
 
-
-def pattern_to_document(pattern: Pattern) -> dict:
-    """Our format (units m) for a pattern's outlines, grain lines, parts and seams (placements
-    are left out: they belong to a body)."""
-    panels = {}
-    for name, panel in pattern.panels.items():
-        verts, edges = [], []
-        for k, e in enumerate(panel.edges):
-            verts.append(e.start.tolist())
-            spec: dict = {"endpoints": [k, (k + 1) % len(panel.edges)]}
-            if e.name:
-                spec["name"] = e.name
-            if e.kind in ("quadratic", "cubic"):
-                spec["curve"] = {"type": e.kind, "control": e.controls.tolist()}
-            elif e.kind == "arc":
-                radius, _, sweep = e._arc_angles()
-                spec["curve"] = {"type": "arc", "radius": radius, "large_arc": bool(abs(sweep) > np.pi), "ccw": e.ccw}
-            edges.append(spec)
-        spec = {"vertices": verts, "edges": edges, "grain": np.asarray(panel.grain, float).tolist()}
-        if panel.part:
-            spec["part"] = panel.part
-        panels[name] = spec
-    seams = [{"a": {"panel": s.a.panel, "edge": s.a.edge}, "b": {"panel": s.b.panel, "edge": s.b.edge},
-              "same_direction": s.same_direction} for s in pattern.seams]
-    return {"format": "party-pattern", "version": 1, "name": pattern.name, "units": "m", "panels": panels, "seams": seams}

@@ -6,7 +6,7 @@ counter-clockwise or clockwise (both are accepted); its edges chain end to start
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
@@ -161,9 +161,6 @@ class Pattern:
 
     def edge(self, ref: EdgeRef) -> Edge:
         return self.panels[ref.panel].edges[ref.edge]
-
-    def with_panel(self, panel: Panel) -> "Pattern":
-        return replace(self, panels={**self.panels, panel.name: panel})
 
 
 def check_panel(panel: Panel) -> None:

@@ -112,8 +112,7 @@ def _pictures(folder: Path, points, triangles, garment, body, sewing_log, drapin
 
     r = render.GarmentRenderer(triangles, garment.triangle_panel(), garment.corner_xy, body.colliders, size=1024)
     r.pose(points)
-    lo, hi = body.vertices().min(axis=0), body.vertices().max(axis=0)
-    camera = {"target": 0.5 * (lo + hi), "distance": 2.2 * float((hi - lo).max())}
+    camera = render.framing(body.vertices(), 2.2)
     for view in ("front", "side", "back"):
         r.render(folder / f"{view}.png", view, **camera)
     r.close()

@@ -56,26 +56,24 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float = 1.0e-4, dev
                                 "final_energy_J": sewn.settling.final_energy, "dt": sewn.dt},
                  "mesh_quality": garment.quality()},
     )
-    scene.pictures = lambda out, frames: _pictures(out, frames, sewn, body, scene, quick)
+    scene.pictures = lambda out, frames: _pictures(out, frames, sewn, body, scene)
     return scene
 
 
-def _pictures(out: Path, frames: list, sewn, body, scene: Scene, quick: bool) -> None:
+def _pictures(out: Path, frames: list, sewn, body, scene: Scene) -> None:
     """Figures 12-14 and the sleeve-fall animation, under ``out/images``."""
     images = out / "images"
     garment = sewn.garment
     write_json(out / "relaxation.json", {"sewing_energy_J": sewn.relaxation.energy,
                                          "settling_energy_J": sewn.settling.energy})
     tri, panel, corners = sewn.net.triangles, garment.triangle_panel(), garment.corner_xy
-    size = 1024
 
     def points(path: Path) -> np.ndarray:
         return np.asarray(trimesh.load(path, process=False).vertices)
 
     first = points(frames[0][1])
-    lo, hi = first.min(axis=0), first.max(axis=0)
-    camera = {"target": 0.5 * (lo + hi), "distance": 2.0 * float((hi - lo).max())}
-    shaded = render.GarmentRenderer(tri, panel, corners, body.colliders, size=size)
+    camera = render.framing(first, 2.0)
+    shaded = render.GarmentRenderer(tri, panel, corners, body.colliders)
     shaded.pose(first)
     shaded.render(images / "initial_shape.png", "three_quarter", **camera)
     shaded.pose(points(frames[-1][1]))

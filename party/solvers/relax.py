@@ -2,12 +2,13 @@
 energy settles" (section 7, figure 12).
 
 Each iteration is one explicit step (eqs. 3-5, collisions and plastic limit included) whose
-velocities v* are filtered by kinetic damping before positions move: a node whose velocity
-turned against the one it had has passed a minimum of the energy along its path, and its
-velocity is zeroed there; all speeds are also capped, so no node moves more than
-``max_speed * dt`` per iteration. This is dynamic relaxation (Day 1965), the standard energy descent
-of form finding: inertia only carries nodes downhill faster than zeroing every velocity each
-iteration would, and the end state is the same static equilibrium.
+velocities v* are capped at ``max_speed`` before positions move, so no node moves more than
+``max_speed * dt`` per iteration. With ``momentum`` 0 every velocity is then zeroed: the paper's
+iteration without inertia, a gradient descent. With ``momentum`` m > 0 a fraction m of v* is
+kept and a node whose velocity turned against the one it had (it has passed a minimum of the
+energy along its path) is stopped there: dynamic relaxation with kinetic damping (Day 1965),
+the standard energy descent of form finding, which reaches the same static equilibrium in
+fewer iterations.
 """
 
 from __future__ import annotations
@@ -54,7 +55,8 @@ class SolverRelax:
         model: The model; its gravity is used as is (zero for sewing, on for draping).
         collision: Collision settings; collisions stay on throughout by default.
         max_speed: Cap on node speed [m/s] during relaxation.
-        keep: Fraction of velocity kept per iteration (a little global damping).
+        momentum: Fraction of velocity kept per iteration (0: velocities zeroed, the paper's
+            iteration without inertia).
     """
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
@@ -85,7 +87,6 @@ class SolverRelax:
             if it % log_every == 0 or it == max_iterations:
                 energy = total_energy(self.model, current.positions())
                 result.energy.append((it, energy))
-                result.iterations = it
                 if on_log is not None:
                     on_log(it, energy, current)
                 if not np.isfinite(energy):
