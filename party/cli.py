@@ -25,6 +25,17 @@ def scenes_command() -> None:
         out.print(f"[bold]{name}[/]  {description}")
 
 
+@app.command("fabrics")
+def fabrics_command() -> None:
+    """List the fabric library with its key figures and sources."""
+    from .fabric import library
+
+    for name, f in library().items():
+        out.print(f"[bold]{name}[/]  {f.areal_density:.3g} kg/m^2, tensile {f.tensile_warp:.4g}/{f.tensile_weft:.4g} N/m, "
+                  f"shear {f.shear:.3g} N/m, bending {f.bending_rigidity:.3g} N*m — {f.description}")
+        out.print(f"    source: {f.source}", highlight=False)
+
+
 @app.command("run")
 def run_command(
     scene: str = typer.Argument(..., help="Scene name (see `party scenes`)."),
@@ -34,6 +45,10 @@ def run_command(
     dt: Optional[float] = typer.Option(None, "--dt", help="Time step [s] (the paper: 1e-4)."),
     wind: Optional[float] = typer.Option(None, "--wind", help="Wind speed [m/s] (rod-wind)."),
     device: Optional[str] = typer.Option(None, "--device", help="cpu, cuda or auto (default: cuda if present)."),
+    grid: Optional[int] = typer.Option(None, "--grid", help="Nodes per side of the cloth (sphere-drop)."),
+    self_collision: Optional[str] = typer.Option(None, "--self-collision", help="on or off: cloth-cloth collision (sphere-drop)."),
+    solver: Optional[str] = typer.Option(None, "--solver", help="explicit (the paper's, the reference) or implicit (large steps)."),
+    fabric: Optional[str] = typer.Option(None, "--fabric", help="Fabric: a library name (see `party fabrics`) or a .toml/.json file."),
     quick: bool = typer.Option(False, "--quick", help="Coarse and short: a fast check (CI)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/checkpoint.npz."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
@@ -44,13 +59,22 @@ def run_command(
     from .scenes import scene_by_name
     from .scenes.runner import run_scene
 
+    from .fabric import fabric_by_name
+    from .solvers.select import check_solver
+
     build = scene_by_name(scene)
+    if self_collision is not None and self_collision not in ("on", "off"):
+        raise InvalidInput(f"--self-collision must be on or off, got {self_collision!r}")
     options = {"duration": duration, "spacing": spacing, "dt": dt, "wind_speed": wind, "device": device,
-               "quick": quick or None, "progress": progress}
+               "grid": grid, "self_collision": None if self_collision is None else self_collision == "on",
+               "solver": None if solver is None else check_solver(solver),
+               "fabric": None if fabric is None else fabric_by_name(fabric), "quick": quick or None,
+               "progress": progress}
     accepted = inspect.signature(build).parameters
+    flags = {"wind_speed": "wind", "self_collision": "self-collision"}
     for name, value in options.items():
         if value is not None and value is not False and name not in accepted and name != "progress":
-            raise InvalidInput(f"scene {scene!r} has no option --{name.replace('_speed', '')}")
+            raise InvalidInput(f"scene {scene!r} has no option --{flags.get(name, name)}")
     built = build(**{k: v for k, v in options.items() if v is not None and k in accepted})
     summary = run_scene(built, out_dir, resume=resume, progress=progress)
     out.print(f"{scene}: {summary['nodes']} nodes, {summary['steps']} steps, {summary['simulated_seconds']:.3f} s "
@@ -63,7 +87,8 @@ def run_command(
 def drape_command(
     pattern: Path = typer.Argument(..., help="Pattern file: our JSON, GarmentCode JSON or DXF-AAMA (.dxf)."),
     body: str = typer.Option("M", "--body", help="Body: a dress-form size (S, M, L) or a mesh file (OBJ/PLY/STL/glTF)."),
-    fabric: str = typer.Option("wool_flannel", "--fabric", help="Fabric preset name."),
+    fabric: str = typer.Option("wool_flannel", "--fabric", help="Fabric: a library name (see `party fabrics`) or a .toml/.json file."),
+    solver: str = typer.Option("explicit", "--solver", help="explicit (the paper's relaxation) or implicit (large steps)."),
     out_dir: Path = typer.Option(..., "--out", help="Output folder (garment.obj/.glb, body.obj, images/, summary.json)."),
     spacing_mm: float = typer.Option(20.0, "--spacing-mm", help="Node spacing of the net [mm] (resolution)."),
     units: Optional[str] = typer.Option(None, "--units", help="Units of a DXF pattern (m, cm, mm, in) if its header has none."),
@@ -80,7 +105,10 @@ def drape_command(
 
     if not (spacing_mm > 0):
         raise InvalidInput(f"--spacing-mm must be positive, got {spacing_mm}")
+    from .solvers.select import check_solver
+
     summary = drape(pattern, body, fabric_by_name(fabric), out_dir, spacing=spacing_mm / 1000.0, device=device,
+                    solver=check_solver(solver),
                     pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,
                     progress=progress)
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "

@@ -1,13 +1,17 @@
-"""Fabrics: the material parameters of the paper's elastic net, in SI units.
+"""Fabrics: the material parameters of the cloth, in SI units.
 
-The faithful preset :func:`wool_flannel` reproduces Table 1 of the paper; the conversions of
-its printed units live in :mod:`party.units`.
+The library ``party/data/fabrics.toml`` holds the paper's wool flannel (Table 1) and measured
+or estimated everyday fabrics, each with its sources; users give their own in the same keys
+as a TOML or JSON file (:func:`load_fabric`). Unit conversions (Table 1's printed units,
+Kawabata's KES units) live in :mod:`party.units`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from functools import lru_cache
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
 
 from . import units
 from .errors import InvalidInput
@@ -33,9 +37,12 @@ class Fabric:
         cloth_friction: kappa, the loss to cloth-cloth friction (eqs. 13-14), in [0, 1].
         thickness: eps, the collision thickness [m] kept between cloth and body and between
             layers (section 6.1).
-        shear: Stiffness of the optional diagonal shear elements [N/m] (0: none, as in the paper).
-        bending: Stiffness of the optional skip-one bending elements [N/m] (0: none, as in the
+        shear: In-plane shear stiffness G [N/m per radian of shear angle], carried by the
+            net's diagonal elements (0: none, as in the paper).
+        bending_rigidity: Bending rigidity B [N*m]: moment per unit width per unit curvature,
+            carried by dihedral hinges on the triangles' interior edges (0: none, as in the
             paper).
+        description, source: Free text; a library fabric names where its values come from.
     """
 
     name: str
@@ -50,7 +57,9 @@ class Fabric:
     cloth_friction: float = 0.23
     thickness: float = 3.0e-3
     shear: float = 0.0
-    bending: float = 0.0
+    bending_rigidity: float = 0.0
+    description: str = ""
+    source: str = ""
 
     def __post_init__(self) -> None:
         positive = ("areal_density", "tensile_warp", "tensile_weft", "thickness")
@@ -58,7 +67,7 @@ class Fabric:
             value = getattr(self, field)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInput(f"fabric {self.name!r}: {field} must be positive and finite, got {value}")
-        for field in ("damping", "shear", "bending"):
+        for field in ("damping", "shear", "bending_rigidity"):
             value = getattr(self, field)
             if not (math.isfinite(value) and value >= 0.0):
                 raise InvalidInput(f"fabric {self.name!r}: {field} must be non-negative and finite, got {value}")
@@ -80,27 +89,95 @@ class Fabric:
 
 
 def wool_flannel() -> Fabric:
-    """The paper's wool flannel, Table 1, converted to SI by :mod:`party.units`."""
-    return Fabric(
-        name="wool_flannel",
-        areal_density=units.areal_density_from_g_per_cm2(0.023),
-        tensile_warp=units.tensile_stiffness_from_table1(1000.0),
-        tensile_weft=units.tensile_stiffness_from_table1(920.0),
-        damping=units.damping_from_table1(4.0),
-        strain_limit=0.0995,
-        restitution=0.03,
-        friction=0.6,
-        momentum_propagation=0.5,
-        cloth_friction=0.23,
-    )
+    """The paper's wool flannel (Table 1), from the library (its conversion is tested against
+    :mod:`party.units`)."""
+    return library()["wool_flannel"]
 
 
-PRESETS = {"wool_flannel": wool_flannel}
+LIBRARY = Path(__file__).parent / "data" / "fabrics.toml"
+"""The fabric library shipped with party."""
+
+_NUMBERS = {f.name for f in fields(Fabric) if f.type in ("float", float)}
+_TEXT = {"description", "source"}
+_KES = {
+    "areal_density_kes": ("areal_density", units.areal_density_from_mg_per_cm2),
+    "tensile_warp_kes": ("tensile_warp", units.tensile_stiffness_from_kes),
+    "tensile_weft_kes": ("tensile_weft", units.tensile_stiffness_from_kes),
+    "shear_kes": ("shear", units.shear_stiffness_from_kes),
+    "bending_rigidity_kes": ("bending_rigidity", units.bending_rigidity_from_kes),
+}
 
 
-def fabric_by_name(name: str) -> Fabric:
-    """Look a preset up by name; a clear error lists the known ones."""
+def fabric_from_mapping(name: str, values: dict, *, origin: str = "fabric") -> Fabric:
+    """A :class:`Fabric` from a table of the library's keys (SI, or KES where the key ends in
+    ``_kes``); ``origin`` names the file in error messages."""
+    if not isinstance(values, dict):
+        raise InvalidInput(f"{origin}: fabric {name!r} must be a table of values")
+    given: dict = {}
+    for key, value in values.items():
+        if key in _TEXT:
+            given[key] = str(value)
+            continue
+        if key not in _NUMBERS and key not in _KES:
+            known = ", ".join(sorted(_NUMBERS | set(_KES) | _TEXT - {"name"}))
+            raise InvalidInput(f"{origin}: fabric {name!r} has unknown key {key!r} (known: {known})")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InvalidInput(f"{origin}: fabric {name!r}: {key} must be a number, got {value!r}")
+        field, convert = _KES.get(key, (key, float))
+        if field in given:
+            raise InvalidInput(f"{origin}: fabric {name!r} gives {field} twice (SI and KES)")
+        given[field] = convert(float(value))
+    missing = [k for k in ("areal_density", "tensile_warp", "tensile_weft", "damping") if k not in given]
+    if missing:
+        raise InvalidInput(f"{origin}: fabric {name!r} lacks {', '.join(missing)}")
+    given.pop("name", None)
+    return Fabric(name=name, **given)
+
+
+def library() -> dict[str, Fabric]:
+    """All fabrics of the library, by name."""
+    return dict(_library())
+
+
+@lru_cache(maxsize=1)
+def _library() -> dict[str, Fabric]:
+    return {name: fabric_from_mapping(name, table, origin=LIBRARY.name)
+            for name, table in _read_document(LIBRARY).items()}
+
+
+def load_fabric(path: str | Path) -> Fabric:
+    """A fabric from a TOML or JSON file holding one fabric's keys at its top level (its name is
+    the ``name`` key or the file's stem)."""
+    path = Path(path)
+    document = _read_document(path)
+    return fabric_from_mapping(str(document.get("name", path.stem)), document, origin=path.name)
+
+
+def fabric_by_name(spec: str) -> Fabric:
+    """A library fabric by name, or a fabric file (``.toml`` or ``.json``) by path."""
+    if spec.endswith((".toml", ".json")) or Path(spec).is_file():
+        return load_fabric(spec)
+    fabrics = library()
+    if spec not in fabrics:
+        raise InvalidInput(f"unknown fabric {spec!r}; known: {', '.join(sorted(fabrics))}, or a .toml/.json file")
+    return fabrics[spec]
+
+
+def _read_document(path: Path) -> dict:
+    import json
+    import tomllib
+
+    if not path.is_file():
+        raise InvalidInput(f"fabric file not found: {path}")
     try:
-        return PRESETS[name]()
-    except KeyError:
-        raise InvalidInput(f"unknown fabric {name!r}; known: {', '.join(sorted(PRESETS))}") from None
+        if path.suffix == ".json":
+            document = json.loads(path.read_text())
+        elif path.suffix == ".toml":
+            document = tomllib.loads(path.read_text())
+        else:
+            raise InvalidInput(f"fabric file {path.name}: expected a .toml or .json file")
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise InvalidInput(f"fabric file {path.name} is not valid {path.suffix[1:].upper()}: {exc}") from None
+    if not isinstance(document, dict):
+        raise InvalidInput(f"fabric file {path.name}: expected a table of values")
+    return document

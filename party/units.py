@@ -71,3 +71,31 @@ def damping_from_table1(rho_visco: float) -> float:
     (well inside explicit stability: 8 * 174 * 1e-4 = 0.14 < 2).
     """
     return rho_visco * 1.0e-3 / (CM * CM)
+
+
+def bending_rigidity_from_kes(b: float) -> float:
+    """Kawabata (KES-FB2) bending rigidity B: gf*cm^2/cm -> N*m (x 9.80665e-5)."""
+    return b * GRAM_FORCE * CM
+
+
+def bending_hysteresis_from_kes(two_hb: float) -> float:
+    """Kawabata bending hysteresis 2HB: gf*cm/cm -> N*m/m (x 9.80665e-3)."""
+    return two_hb * GRAM_FORCE
+
+
+def shear_stiffness_from_kes(g: float) -> float:
+    """Kawabata (KES-FB1) shear stiffness G: gf/cm per degree -> N/m per radian (x 56.19)."""
+    import math
+
+    return g * GRAM_FORCE / CM * 180.0 / math.pi
+
+
+def areal_density_from_mg_per_cm2(w: float) -> float:
+    """Kawabata weight W: mg/cm^2 -> kg/m^2 (x 1e-2)."""
+    return w * 1.0e-2
+
+
+def tensile_stiffness_from_kes(emt_percent: float) -> float:
+    """Secant tensile stiffness [N/m] from Kawabata's extensibility EMT [%], the strain at the
+    KES-FB1 load of 500 gf/cm: 500 gf/cm / (EMT / 100)."""
+    return 500.0 * GRAM_FORCE / CM / (emt_percent / 100.0)

@@ -38,7 +38,7 @@ def test_bad_run_options(tmp_path, args, message):
 def test_unknown_scene():
     result = party("run", "no-such-scene", "--out", "x")
     assert result.returncode == 1
-    assert result.stderr.strip() == "error: unknown scene 'no-such-scene'; known: dress, rod-wind"
+    assert result.stderr.strip() == "error: unknown scene 'no-such-scene'; known: dress, rod-wind, sphere-drop"
 
 
 def test_scenes_are_listed():

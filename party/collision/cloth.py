@@ -28,6 +28,69 @@ MAX_CANDIDATES = 48
 """Cloth triangles remembered per node between interval-list queries."""
 
 
+@wp.func
+def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
+                   nbr_offsets: wp.array(dtype=int), nbrs: wp.array(dtype=int), ring: int, count: int,
+                   out: wp.array(dtype=int, ndim=2), out_distance: wp.array(dtype=float, ndim=2),
+                   overflow: wp.array(dtype=int)) -> int:
+    """Keep triangle t as a candidate of node i unless it holds the node (or, with ``ring`` 1,
+    one of its neighbours); beyond MAX_CANDIDATES the farthest is replaced. Returns the new
+    count."""
+    ta = tris[t, 0]
+    tb = tris[t, 1]
+    tc = tris[t, 2]
+    if is_neighbor(i, ta, nbr_offsets, nbrs, ring) or is_neighbor(i, tb, nbr_offsets, nbrs, ring) or is_neighbor(i, tc, nbr_offsets, nbrs, ring):
+        return count
+    w = closest_point_barycentric(x0, x[ta], x[tb], x[tc])
+    dist = wp.length(x0 - interpolate(w, x[ta], x[tb], x[tc]))
+    slot = count
+    if count < MAX_CANDIDATES:
+        count += 1
+    else:
+        wp.atomic_add(overflow, 0, 1)
+        slot = int(-1)
+        worst = dist
+        for s in range(MAX_CANDIDATES):
+            if out_distance[i, s] > worst:
+                worst = out_distance[i, s]
+                slot = s
+    if slot >= 0:
+        out[i, slot] = t
+        out_distance[i, slot] = dist
+    return count
+
+
+@wp.kernel
+def gather_cloth_triangles_bvh(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    thickness: wp.array(dtype=float),
+    tris: wp.array(dtype=int, ndim=2),
+    nbr_offsets: wp.array(dtype=int),
+    nbrs: wp.array(dtype=int),
+    bvh: wp.uint64,
+    ring: int,
+    dt: float,
+    margin: float,
+    out: wp.array(dtype=int, ndim=2),
+    out_count: wp.array(dtype=int),
+    out_distance: wp.array(dtype=float, ndim=2),
+    overflow: wp.array(dtype=int),
+):
+    """:func:`gather_cloth_triangles` with a BVH (:mod:`party.collision.bvh`) in place of the
+    interval lists: the same box, the same triangles kept."""
+    i = wp.tid()
+    x0 = x[i]
+    x1 = x0 + v[i] * dt
+    pad = wp.vec3(thickness[i] + margin)
+    query = wp.bvh_query_aabb(bvh, wp.min(x0, x1) - pad, wp.max(x0, x1) + pad)
+    t = int(0)
+    count = int(0)
+    while wp.bvh_query_next(query, t):
+        count = keep_candidate(i, t, x0, x, tris, nbr_offsets, nbrs, ring, count, out, out_distance, overflow)
+    out_count[i] = count
+
+
 @wp.kernel
 def gather_cloth_triangles(
     x: wp.array(dtype=wp.vec3),
@@ -67,27 +130,7 @@ def gather_cloth_triangles(
                 continue
             if not boxes_overlap(lo, hi, lists.item_lo[t], lists.item_hi[t]):
                 continue
-            ta = tris[t, 0]
-            tb = tris[t, 1]
-            tc = tris[t, 2]
-            if is_neighbor(i, ta, nbr_offsets, nbrs, ring) or is_neighbor(i, tb, nbr_offsets, nbrs, ring) or is_neighbor(i, tc, nbr_offsets, nbrs, ring):
-                continue
-            w = closest_point_barycentric(x0, x[ta], x[tb], x[tc])
-            dist = wp.length(x0 - interpolate(w, x[ta], x[tb], x[tc]))
-            slot = count
-            if count < MAX_CANDIDATES:
-                count += 1
-            else:
-                wp.atomic_add(overflow, 0, 1)
-                slot = int(-1)
-                worst = dist
-                for s in range(MAX_CANDIDATES):
-                    if out_distance[i, s] > worst:
-                        worst = out_distance[i, s]
-                        slot = s
-            if slot >= 0:
-                out[i, slot] = t
-                out_distance[i, slot] = dist
+            count = keep_candidate(i, t, x0, x, tris, nbr_offsets, nbrs, ring, count, out, out_distance, overflow)
     out_count[i] = count
 
 

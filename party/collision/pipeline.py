@@ -8,9 +8,11 @@ import numpy as np
 import warp as wp
 
 from ..model import Model, State
-from .body import MAX_FACES, collide_body, gather_body_faces
+from ..errors import InvalidInput
+from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_bvh
+from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
-                    respond_cloth)
+                    gather_cloth_triangles_bvh, respond_cloth)
 from .intervals import AxisIntervalLists, moved_beyond
 
 
@@ -43,6 +45,11 @@ class CollisionSettings:
     search_margin: float = 4.0e-3
     max_cells: int = 256
     exclude_ring: int = 0
+    broad_phase: str = "intervals"
+
+    def __post_init__(self) -> None:
+        if self.broad_phase not in ("intervals", "bvh"):
+            raise InvalidInput(f"unknown broad phase {self.broad_phase!r}; known: intervals, bvh")
 
 
 class CollisionPipeline:
@@ -58,7 +65,9 @@ class CollisionPipeline:
         self.has_cloth = settings.cloth and model.triangle_count > 0
         self.body_moving = bool(np.any(model.collider_velocity != 0.0))
         self.margin = float(settings.search_margin)
+        self.bvh = settings.broad_phase == "bvh"
         self.contacts = wp.zeros(n, dtype=int, device=dev)
+        """1 for each node that touched a body in the last :meth:`apply`."""
         self.searches = 0
         self._flag = wp.ones(1, dtype=int, device=dev)
         self._overflow = wp.zeros(1, dtype=int, device=dev)
@@ -67,13 +76,19 @@ class CollisionPipeline:
         if self.has_body:
             colliders = model.host["colliders"]
             size = max(_triangle_size(c.vertices, c.faces) for c in colliders)
-            self.body_lists = AxisIntervalLists(model.collider_faces, min_cell=size, max_cells=settings.max_cells)
+            if self.bvh:
+                self.body_tree = TriangleBvh(model.collider_faces)
+            else:
+                self.body_lists = AxisIntervalLists(model.collider_faces, min_cell=size, max_cells=settings.max_cells)
             self.body_faces = wp.zeros((n, MAX_FACES), dtype=int, device=dev)
             self.body_face_count = wp.zeros(n, dtype=int, device=dev)
             self._body_built = False
         if self.has_cloth:
             size = _triangle_size(model.host["points"], model.triangles)
-            self.cloth_lists = AxisIntervalLists(model.triangle_nodes, min_cell=size, max_cells=settings.max_cells)
+            if self.bvh:
+                self.cloth_tree = TriangleBvh(model.triangle_nodes)
+            else:
+                self.cloth_lists = AxisIntervalLists(model.triangle_nodes, min_cell=size, max_cells=settings.max_cells)
             self.cloth_candidates = wp.zeros((n, MAX_CANDIDATES), dtype=int, device=dev)
             self.cloth_candidate_count = wp.zeros(n, dtype=int, device=dev)
             self._candidate_distance = wp.zeros((n, MAX_CANDIDATES), dtype=float, device=dev)
@@ -93,6 +108,7 @@ class CollisionPipeline:
         time (this reads one flag from the device)."""
         m = self.model
         dev = m.device
+        self.contacts.zero_()
         if self.has_body or self.has_cloth:
             wp.launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag], device=dev)
             if self.body_moving or int(self._flag.numpy()[0]):
@@ -109,13 +125,20 @@ class CollisionPipeline:
                                   m.triangle_nodes, self.contact_tri, self.contact_w, self.contact_n,
                                   self.contact_count, dt, self.dv, self.dx, self.hits], device=dev)
                 wp.launch(apply_cloth_response, dim=m.node_count, inputs=[x, v, self.dv, self.dx, self.hits], device=dev)
-            if self.has_body:
-                wp.launch(collide_body, dim=m.node_count,
-                          inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution,
-                                  state.collider_q, state.collider_qd, m.collider_normals, m.collider_faces,
-                                  self.body_faces, self.body_face_count, dt, self.contacts], device=dev)
+            self.body_pass(x, v, state, dt)
             if not self.has_cloth:
                 break
+
+    def body_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
+        """One cloth-body response pass (eqs. 8-12) over the candidates of the last search;
+        nodes in contact are flagged in ``contacts``."""
+        if not self.has_body:
+            return
+        m = self.model
+        wp.launch(collide_body, dim=m.node_count,
+                  inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution,
+                          state.collider_q, state.collider_qd, m.collider_normals, m.collider_faces,
+                          self.body_faces, self.body_face_count, dt, self.contacts], device=m.device)
 
     def _search(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         m = self.model
@@ -127,16 +150,26 @@ class CollisionPipeline:
         half = 0.5 * self.margin
         if self.has_body:
             if self.body_moving or not self._body_built:
-                self.body_lists.build_checked(state.collider_q, state.collider_qd, dt, 0.0)
+                if self.bvh:
+                    self.body_tree.build(state.collider_q, state.collider_qd, dt, 0.0)
+                else:
+                    self.body_lists.build_checked(state.collider_q, state.collider_qd, dt, 0.0)
                 self._body_built = True
-            wp.launch(gather_body_faces, dim=m.node_count,
-                      inputs=[x, v, m.node_inv_mass, m.node_thickness, self.body_lists.lists, dt, half,
+            gather, structure = ((gather_body_faces_bvh, self.body_tree.id) if self.bvh
+                                 else (gather_body_faces, self.body_lists.lists))
+            wp.launch(gather, dim=m.node_count,
+                      inputs=[x, v, m.node_inv_mass, m.node_thickness, structure, dt, half,
                               self.body_faces, self.body_face_count, self._overflow], device=dev)
         if self.has_cloth:
-            self.cloth_lists.build_checked(x, v, dt, half)
-            wp.launch(gather_cloth_triangles, dim=m.node_count,
+            if self.bvh:
+                self.cloth_tree.build(x, v, dt, half)
+                gather, structure = gather_cloth_triangles_bvh, self.cloth_tree.id
+            else:
+                self.cloth_lists.build_checked(x, v, dt, half)
+                gather, structure = gather_cloth_triangles, self.cloth_lists.lists
+            wp.launch(gather, dim=m.node_count,
                       inputs=[x, v, m.node_thickness, m.triangle_nodes, m.node_neighbor_offsets, m.node_neighbors,
-                              self.cloth_lists.lists, int(self.settings.exclude_ring), dt, half, self.cloth_candidates,
+                              structure, int(self.settings.exclude_ring), dt, half, self.cloth_candidates,
                               self.cloth_candidate_count, self._candidate_distance, self._overflow], device=dev)
         wp.copy(self._x_ref, x)
         self._flag.zero_()

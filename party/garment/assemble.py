@@ -83,7 +83,7 @@ class Garment:
         sewn = ClothNet(uv=net.uv[first], elements=elements[keep].astype(np.int32), kinds=net.kinds[keep],
                         widths=net.widths[keep], triangles=node_map[net.triangles].astype(np.int32), shape=(0, 0),
                         warp_share=net.element_warp_share()[keep], rest_lengths=net.element_rest_lengths()[keep],
-                        triangle_areas=net.rest_triangle_areas())
+                        triangle_uv=net.rest_triangle_uv())
         return sewn, node_map
 
 

@@ -2,8 +2,9 @@
 
 A :class:`ClothNet` holds nodes in the flat pattern plane (metres, warp along +u), the
 elements joining them and the triangles used for collision and rendering. Element kinds:
-warp and weft (the paper's 4-neighbour net), and the optional shear diagonals and skip-one
-bending elements that later, more realistic fabrics switch on.
+warp and weft (the paper's 4-neighbour net), and shear diagonals that carry a fabric's shear
+stiffness (dropped for fabrics without one, such as the paper's). Bending lives on the
+triangles' interior edges (:func:`party.meshing.hinges.hinges`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ class ElementKind(IntEnum):
     WARP = 0
     WEFT = 1
     SHEAR = 2
-    BEND = 3
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,9 @@ class ClothNet:
             weft's); None means 1 for warp and 0 for weft elements (grid-aligned nets).
         rest_lengths: Element rest lengths [m]; None means their lengths in ``uv``. Sewn
             garments, whose merged seam nodes have one uv per panel, give them explicitly.
-        triangle_areas: Rest areas of the triangles [m^2]; None means their areas in ``uv``.
+        triangle_uv: Each triangle corner's rest position in the flat pattern [m], shape
+            (t, 3, 2); None means ``uv[triangles]``. Sewn garments, whose merged seam nodes
+            have one uv per panel, give them explicitly.
     """
 
     uv: np.ndarray
@@ -52,7 +54,7 @@ class ClothNet:
     shape: tuple[int, int]
     warp_share: np.ndarray | None = None
     rest_lengths: np.ndarray | None = None
-    triangle_areas: np.ndarray | None = None
+    triangle_uv: np.ndarray | None = None
 
     @property
     def node_count(self) -> int:
@@ -70,11 +72,15 @@ class ClothNet:
             return np.asarray(self.warp_share, float)
         return (self.kinds == ElementKind.WARP).astype(float)
 
+    def rest_triangle_uv(self) -> np.ndarray:
+        """See ``triangle_uv``."""
+        if self.triangle_uv is not None:
+            return np.asarray(self.triangle_uv, float)
+        return self.uv[self.triangles]
+
     def rest_triangle_areas(self) -> np.ndarray:
         """Rest area of each triangle [m^2]."""
-        if self.triangle_areas is not None:
-            return np.asarray(self.triangle_areas, float)
-        p = self.uv[self.triangles]
+        p = self.rest_triangle_uv()
         e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
         return 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
 
@@ -85,8 +91,7 @@ class ClothNet:
         return out
 
 
-def rectangular_net(width: float, height: float, spacing: float, *, shear: bool = False,
-                    bending: bool = False) -> ClothNet:
+def rectangular_net(width: float, height: float, spacing: float) -> ClothNet:
     """A rectangle of cloth, ``width`` along the warp (u) by ``height`` along the weft (v) [m].
 
     Nodes sit on a square grid of the given spacing (adjusted so both sides divide evenly).
@@ -120,15 +125,9 @@ def rectangular_net(width: float, height: float, spacing: float, *, shear: bool 
 
     add(index[:, :-1], index[:, 1:], ElementKind.WARP, (hv * row_share)[:, None])
     add(index[:-1, :], index[1:, :], ElementKind.WEFT, (hu * col_share)[None, :])
-    if shear:
-        diag = np.hypot(hu, hv)
-        add(index[:-1, :-1], index[1:, 1:], ElementKind.SHEAR, np.full((nv - 1, nu - 1), 0.5 * diag))
-        add(index[:-1, 1:], index[1:, :-1], ElementKind.SHEAR, np.full((nv - 1, nu - 1), 0.5 * diag))
-    if bending:
-        if nu > 2:
-            add(index[:, :-2], index[:, 2:], ElementKind.BEND, (hv * row_share)[:, None])
-        if nv > 2:
-            add(index[:-2, :], index[2:, :], ElementKind.BEND, (hu * col_share)[None, :])
+    diag = np.hypot(hu, hv)
+    add(index[:-1, :-1], index[1:, 1:], ElementKind.SHEAR, np.full((nv - 1, nu - 1), 0.5 * diag))
+    add(index[:-1, 1:], index[1:, :-1], ElementKind.SHEAR, np.full((nv - 1, nu - 1), 0.5 * diag))
 
     a, b = index[:-1, :-1].ravel(), index[:-1, 1:].ravel()
     c, d = index[1:, 1:].ravel(), index[1:, :-1].ravel()

@@ -11,6 +11,7 @@ from .. import device as devices
 from ..body.collider import ColliderMesh
 from ..errors import InvalidInput
 from ..fabric import Fabric
+from ..meshing.hinges import hinges
 from ..meshing.net import ClothNet, ElementKind
 from ..units import GRAVITY
 from .model import Model
@@ -48,6 +49,7 @@ class ModelBuilder:
         self._elements: list[np.ndarray] = []
         self._element_params: list[np.ndarray] = []  # rest, stiffness, damping, max length
         self._triangles: list[np.ndarray] = []
+        self._hinges: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # nodes, weights, stiffness
         self._kinematic: set[int] = set()
         self._colliders: list[ColliderMesh] = []
         self.cloths: list[ClothRange] = []
@@ -104,9 +106,11 @@ class ModelBuilder:
         self._add_nodes(points, masses, fabric, uv=net.uv)
 
         rest = net.element_rest_lengths()
+        # A quad's two diagonals of constant k give it shear stiffness k per unit width; a
+        # diagonal standing for half the quad's diagonal (width d / 2) needs 2 G w / l = G.
         tensile = {ElementKind.WARP: fabric.tensile_warp, ElementKind.WEFT: fabric.tensile_weft,
-                   ElementKind.SHEAR: fabric.shear, ElementKind.BEND: fabric.bending}
-        modulus = np.array([tensile[ElementKind(k)] for k in range(4)])[net.kinds]
+                   ElementKind.SHEAR: 2.0 * fabric.shear}
+        modulus = np.array([tensile[ElementKind(k)] for k in range(len(ElementKind))])[net.kinds]
         share = net.element_warp_share()
         in_plane = np.isin(net.kinds, [ElementKind.WARP, ElementKind.WEFT])
         modulus = np.where(in_plane, share * fabric.tensile_warp + (1.0 - share) * fabric.tensile_weft, modulus)
@@ -121,6 +125,9 @@ class ModelBuilder:
         )
         self._triangles.append(net.triangles + node_start)
         self._triangle_count += len(net.triangles)
+        if fabric.bending_rigidity > 0.0:
+            nodes, weights, scale = hinges(net)
+            self._hinges.append((nodes + node_start, weights, fabric.bending_rigidity * scale))
         cloth = ClothRange(name, node_start, self._node_count, tri_start, self._triangle_count, net)
         self.cloths.append(cloth)
         return cloth
@@ -178,6 +185,9 @@ class ModelBuilder:
         elements = np.concatenate(self._elements) if self._elements else np.zeros((0, 2), np.int32)
         params = np.concatenate(self._element_params) if self._element_params else np.zeros((0, 4))
         triangles = np.concatenate(self._triangles) if self._triangles else np.zeros((0, 3), np.int32)
+        hinge_nodes = np.concatenate([h[0] for h in self._hinges]) if self._hinges else np.zeros((0, 4), np.int32)
+        hinge_weights = np.concatenate([h[1] for h in self._hinges]) if self._hinges else np.zeros((0, 4))
+        hinge_stiffness = np.concatenate([h[2] for h in self._hinges]) if self._hinges else np.zeros(0)
         kinematic = np.zeros(self._node_count, bool)
         kinematic[list(self._kinematic)] = True
         inv_mass = np.where(kinematic, 0.0, 1.0 / mass)
@@ -224,6 +234,10 @@ class ModelBuilder:
             element_color_offsets=tuple(int(c) for c in color_offsets),
             element_colored=arr(colored, wp.int32),
             triangle_nodes=arr(triangles.astype(np.int32), wp.int32),
+            hinge_count=len(hinge_nodes),
+            hinge_nodes=arr(hinge_nodes.astype(np.int32), wp.vec4i),
+            hinge_weights=arr(hinge_weights.astype(np.float32), wp.vec4),
+            hinge_stiffness=arr(hinge_stiffness.astype(np.float32), wp.float32),
             collider_names=names,
             collider_face_ranges=ranges,
             collider_faces=arr(faces, wp.int32),
@@ -233,7 +247,8 @@ class ModelBuilder:
             gravity=wp.vec3(*self.gravity),
             host={
                 "points": points, "mass": mass, "elements": elements, "element_params": params,
-                "triangles": triangles, "kinematic": kinematic, "cloths": tuple(self.cloths),
+                "triangles": triangles, "kinematic": kinematic, "hinge_nodes": hinge_nodes,
+                "hinge_weights": hinge_weights, "hinge_stiffness": hinge_stiffness, "cloths": tuple(self.cloths),
                 "colliders": tuple(self._colliders),
             },
         )

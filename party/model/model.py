@@ -34,6 +34,11 @@ class Model:
         element_color_offsets, element_colored: elements grouped so that no two in a group
             share a node (host offsets, device ids), for the plastic-limit passes.
         triangle_nodes: (a, b, c) per cloth triangle, int32 shape [t, 3].
+        hinge_nodes: (a, b, c, d) per bending hinge: interior edge (a, b), opposite corners c
+            and d (:mod:`party.meshing.hinges`), vec4i.
+        hinge_weights: Cotangent weights K of each hinge's curvature vector sum_i K_i x_i, vec4.
+        hinge_stiffness: B / (A_0 + A_1) [N/m] of each hinge: its energy is
+            stiffness * |sum_i K_i x_i|^2 / 2.
         collider_faces: Triangles of all colliders together, int32 shape [c, 3].
         collider_rest_points: Collider vertex positions at set-up [m].
         collider_normals: Collider normals at each face corner at set-up, unit, vec3 shape
@@ -66,6 +71,10 @@ class Model:
     element_color_offsets: tuple[int, ...]
     element_colored: wp.array
     triangle_nodes: wp.array
+    hinge_count: int
+    hinge_nodes: wp.array
+    hinge_weights: wp.array
+    hinge_stiffness: wp.array
     collider_names: tuple[str, ...]
     collider_face_ranges: tuple[tuple[int, int], ...]
     collider_faces: wp.array

@@ -17,39 +17,44 @@ import numpy as np
 import trimesh
 
 from ..body.dress_form import dress_form
-from ..fabric import wool_flannel
+from ..fabric import Fabric, wool_flannel
 from ..garment.assemble import assemble
 from ..output import render
 from ..output.frames import write_json
 from ..pattern import load_pattern
-from ..solvers.explicit.solver import SolverExplicit
+from ..solvers.select import DEFAULT_DT, check_solver, make_solver
 from .garment_sim import garment_model, sew
 from .scene import Scene
 
 PATTERN = "dress_sleeves.json"
+PAPER_DT = 1.0e-4
+"""The paper's time step [s]."""
 WIREFRAME_EVERY = 1000
-"""Steps between wireframe drawings (figure 13)."""
+"""Steps of PAPER_DT between wireframe drawings (figure 13), whichever solver runs."""
 
 
 def pattern_path() -> Path:
     return Path(str(resources.files("party.data").joinpath("patterns", PATTERN)))
 
 
-def build(spacing: float = 0.015, duration: float = 1.2, dt: float = 1.0e-4, device: str | None = None,
-          quick: bool = False, size: str = "M", progress: bool = False) -> Scene:
-    """The dress on dress form ``size``; ``quick`` coarsens everything for a fast check."""
+def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None, device: str | None = None,
+          quick: bool = False, size: str = "M", progress: bool = False, solver: str = "explicit",
+          fabric: Fabric | None = None) -> Scene:
+    """The dress on dress form ``size``; ``quick`` coarsens everything for a fast check. ``dt``
+    [s] defaults to the solver's (the paper's 1e-4 s for the explicit one)."""
+    dt = DEFAULT_DT[check_solver(solver)] if dt is None else dt
     if quick:
         spacing, duration = max(spacing, 0.03), min(duration, 0.3)
-    fabric = wool_flannel()
+    fabric = fabric or wool_flannel()
     body = dress_form(size)
     garment = assemble(load_pattern(pattern_path()), spacing)
     sewn = sew(garment, body, fabric, device=device, max_iterations=3000 if quick else 8000, progress=progress)
     model = garment_model(sewn.net, fabric, sewn.points, body, device=device, name="dress")
     scene = Scene(
-        name="dress", model=model, solver=SolverExplicit(model), dt=dt, duration=duration,
-        frame_interval=WIREFRAME_EVERY * dt / 2,
+        name="dress", model=model, solver=make_solver(solver, model), dt=dt, duration=duration,
+        frame_interval=WIREFRAME_EVERY * PAPER_DT / 2,
         parameters={"spacing": spacing, "duration": duration, "dt": dt, "fabric": fabric.name, "body": body.name,
-                    "quick": quick},
+                    "quick": quick, "solver": solver},
         summary={"seams": len(garment.pattern.seams), "max_seam_gap_mm": round(1000 * sewn.max_seam_gap, 3),
                  "relaxation": {"iterations": sewn.relaxation.iterations + sewn.settling.iterations,
                                 "converged": sewn.settling.converged,
@@ -92,6 +97,6 @@ def _pictures(out: Path, frames: list, sewn, body, scene: Scene) -> None:
     for t, path in picks:
         wire.pose(points(path))
         shots.append(wire.image("front", **camera))
-        labels.append(f"step {int(round(t / scene.dt))}")
+        labels.append(f"step {int(round(t / PAPER_DT))}" if scene.dt == PAPER_DT else f"t = {t:.2f} s")
     wire.close()
     render.tile(shots, labels, images / "wireframe_sequence.png", columns=min(len(shots), 6))

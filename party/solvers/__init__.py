@@ -2,5 +2,6 @@
 
 from .aero import Air
 from .explicit import SolverExplicit
+from .implicit import SolverImplicit
 
-__all__ = ["Air", "SolverExplicit"]
+__all__ = ["Air", "SolverExplicit", "SolverImplicit"]

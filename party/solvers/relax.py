@@ -1,7 +1,8 @@
 """Static relaxation: the paper's "iterate ignoring inertia until the total (mostly spring)
 energy settles" (section 7, figure 12).
 
-Each iteration is one explicit step (eqs. 3-5, collisions and plastic limit included) whose
+Each iteration is one explicit step (eqs. 3-5, collisions and plastic limit included; or one
+implicit step, :mod:`party.solvers.implicit`, which allows a far larger dt) whose
 velocities v* are capped at ``max_speed`` before positions move, so no node moves more than
 ``max_speed * dt`` per iteration. With ``momentum`` 0 every velocity is then zeroed: the paper's
 iteration without inertia, a gradient descent. With ``momentum`` m > 0 a fraction m of v* is
@@ -20,6 +21,7 @@ import numpy as np
 from ..collision import CollisionSettings
 from ..model import Control, Model, State
 from .explicit.solver import SolverExplicit
+from .implicit import SolverImplicit
 
 
 def total_energy(model: Model, points: np.ndarray) -> float:
@@ -57,18 +59,23 @@ class SolverRelax:
         max_speed: Cap on node speed [m/s] during relaxation.
         momentum: Fraction of velocity kept per iteration (0: velocities zeroed, the paper's
             iteration without inertia).
+        solver: "explicit" (the paper's step, dt below its stability limit) or "implicit"
+            (backward Euler steps, any dt; see :mod:`party.solvers.implicit`).
     """
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
-                 max_speed: float = 1.0, momentum: float = 0.0) -> None:
+                 max_speed: float = 1.0, momentum: float = 0.0, solver: str = "explicit") -> None:
         self.model = model
         self.momentum = float(momentum)
-        self.explicit = SolverExplicit(model, collision=collision,
-                                       kinetic_damping=(max_speed, 1.0 if momentum == 0.0 else momentum))
+        damping = (max_speed, 1.0 if momentum == 0.0 else momentum)
+        if solver == "explicit":
+            self.stepper = SolverExplicit(model, collision=collision, kinetic_damping=damping)
+        else:
+            self.stepper = SolverImplicit(model, collision=collision, kinetic_damping=damping)
 
     def iterate(self, state: State, scratch: State, control: Control, dt: float) -> None:
         """One iteration from ``state`` into ``scratch`` (swap after)."""
-        self.explicit.step(state, scratch, control, dt)
+        self.stepper.step(state, scratch, control, dt)
         if self.momentum == 0.0:
             scratch.node_qd.zero_()
 

@@ -136,3 +136,22 @@ def advance_positions(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt
     """Eq. (4): r(t + dt) = r(t) + v(t + dt) dt."""
     i = wp.tid()
     x[i] = x[i] + v[i] * dt
+
+
+@wp.kernel
+def hinge_forces(
+    x: wp.array(dtype=wp.vec3),
+    hinge_nodes: wp.array(dtype=wp.vec4i),
+    hinge_weights: wp.array(dtype=wp.vec4),
+    hinge_stiffness: wp.array(dtype=float),
+    f: wp.array(dtype=wp.vec3),
+):
+    """Bending (:mod:`party.meshing.hinges`): with k = sum_i K_i x_i, each corner i of a hinge
+    takes f_i = -stiffness K_i k [N], added to ``f``."""
+    h = wp.tid()
+    n = hinge_nodes[h]
+    w = hinge_weights[h]
+    k = w[0] * x[n[0]] + w[1] * x[n[1]] + w[2] * x[n[2]] + w[3] * x[n[3]]
+    s = hinge_stiffness[h]
+    for c in range(4):
+        wp.atomic_add(f, n[c], -s * w[c] * k)

@@ -5,15 +5,12 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-from ...collision import CollisionPipeline, CollisionSettings
+from ...collision import CollisionSettings
 from ...errors import InvalidInput
 from ...model import Control, Model, State
 from ..aero import Air, AirForces
-from .kernels import advance_positions, count_over_limit, kinetic_damping, net_forces_and_velocity, plastic_limit
-
-
-PLASTIC_TOLERANCE = 5.0e-5
-"""Relative length beyond the plastic limit left to the next step's sweeps (0.005 %)."""
+from ..step_end import StepEnd
+from .kernels import hinge_forces, kinetic_damping, net_forces_and_velocity
 
 
 class SolverExplicit:
@@ -23,7 +20,7 @@ class SolverExplicit:
         v(t + dt) = Collision(v*)                          (5)
         r(t + dt) = r(t) + v(t + dt) dt                    (4)
 
-    with df = f_spring + f_visco + f_ext and the plastic limit f_plas applied to v* before
+    with df = f_spring + f_visco + f_ext (f_ext: wind and, beyond the paper, bending) and the plastic limit f_plas applied to v* before
     Collision (section 5). Stable while dt is below :meth:`critical_time_step`; the paper uses
     dt = 1e-4 s on a net of about 1 cm.
 
@@ -42,36 +39,15 @@ class SolverExplicit:
                  kinetic_damping: tuple[float, float] | None = None) -> None:
         self.model = model
         self.kinetic_damping = kinetic_damping
-        self.collision = CollisionPipeline(model, collision) if collision is not None else None
+        self.end = StepEnd(model, collision, plastic_passes)
+        self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
-        self.plastic_passes = plastic_passes
         self._f_ext = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)
-        self._over_limit = wp.zeros(1, dtype=int, device=model.device)
-        self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
-        self._has_limit = bool((model.host["element_params"][:, 3] < 1e29).any()) if model.element_count else False
 
     def critical_time_step(self) -> float:
         """Largest stable dt [s] of the undamped net at rest: 2 / omega_max, with omega_max^2 the
         largest eigenvalue of M^-1/2 K M^-1/2 (K the springs' stiffness, M the lumped masses)."""
         return critical_time_step(self.model)
-
-    def _apply_plastic_limit(self, state: State, dt: float) -> None:
-        """Gauss-Seidel sweeps over the element colours until no element would end the step
-        beyond its limit (to :data:`PLASTIC_TOLERANCE`), at most ``plastic_passes`` sweeps. Reads one
-        counter from the device per sweep; no sweep runs while the net is within its limits."""
-        m = self.model
-        offsets = m.element_color_offsets
-        for _ in range(self.plastic_passes):
-            self._over_limit.zero_()
-            wp.launch(count_over_limit, dim=m.element_count,
-                      inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes, m.element_max_length,
-                              dt, PLASTIC_TOLERANCE, self._over_limit], device=m.device)
-            if int(self._over_limit.numpy()[0]) == 0:
-                return
-            for c in range(len(offsets) - 1):
-                wp.launch(plastic_limit, dim=offsets[c + 1] - offsets[c],
-                          inputs=[m.element_colored, offsets[c], state.node_q, state.node_qd,
-                                  m.node_inv_mass, m.element_nodes, m.element_max_length, dt], device=m.device)
 
     def step(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
         """Advance ``state_in`` by ``dt`` [s] into ``state_out`` (distinct objects; swap after)."""
@@ -82,6 +58,9 @@ class SolverExplicit:
         self._f_ext.zero_()
         if self.air is not None:
             self.air.accumulate(state_in.node_q, state_in.node_qd, control.wind, self._f_ext)
+        if m.hinge_count:
+            wp.launch(hinge_forces, dim=m.hinge_count,
+                      inputs=[state_in.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_stiffness, self._f_ext], device=dev)
         wp.launch(net_forces_and_velocity, dim=m.node_count,
                   inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, m.node_element_offsets,
                           m.node_element_ids, m.element_nodes, m.element_rest_length, m.element_stiffness,
@@ -90,17 +69,7 @@ class SolverExplicit:
         if self.kinetic_damping is not None:
             wp.launch(kinetic_damping, dim=m.node_count,
                       inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=dev)
-        if self._has_limit:
-            self._apply_plastic_limit(state_out, dt)
-        wp.copy(state_out.collider_q, state_in.collider_q)
-        wp.copy(state_out.collider_qd, state_in.collider_qd)
-        if self.collision is not None:
-            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
-        wp.launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
-        if self._moving_colliders:
-            wp.launch(advance_positions, dim=len(state_out.collider_q),
-                      inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
-        state_out.time = state_in.time + dt
+        self.end.finish(state_in, state_out, dt)
 
 
 def critical_time_step(model: Model) -> float:

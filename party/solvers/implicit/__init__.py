@@ -1,0 +1,3 @@
+from .solver import SolverImplicit
+
+__all__ = ["SolverImplicit"]

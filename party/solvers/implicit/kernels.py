@@ -1,0 +1,114 @@
+"""Kernels of the implicit solver: Vertex Block Descent on implicit Euler's incremental
+potential (Chen, Macklin, Macklin, Yuksel, Kim: "Vertex Block Descent", SIGGRAPH 2024)."""
+
+import warp as wp
+
+
+@wp.kernel
+def inertial_target(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    f_ext: wp.array(dtype=wp.vec3),
+    gravity: wp.vec3,
+    kinematic_velocity: wp.array(dtype=wp.vec3),
+    dt: float,
+    y: wp.array(dtype=wp.vec3),
+    x_iter: wp.array(dtype=wp.vec3),
+):
+    """y = x + v dt + (G + f_ext / m) dt^2, the position inertia alone would reach [m]; the
+    iterate starts there. Kinematic nodes move with the control's velocity and stay there."""
+    i = wp.tid()
+    if inv_mass[i] == 0.0:
+        y[i] = x[i] + kinematic_velocity[i] * dt
+    else:
+        y[i] = x[i] + v[i] * dt + (gravity + f_ext[i] * inv_mass[i]) * dt * dt
+    x_iter[i] = y[i]
+
+
+@wp.kernel
+def block_descent(
+    colored: wp.array(dtype=int),
+    offset: int,
+    x_start: wp.array(dtype=wp.vec3),
+    y: wp.array(dtype=wp.vec3),
+    mass: wp.array(dtype=float),
+    inv_mass: wp.array(dtype=float),
+    spring_offsets: wp.array(dtype=int),
+    spring_other: wp.array(dtype=int),
+    spring_params: wp.array(dtype=wp.vec3),
+    bend_offsets: wp.array(dtype=int),
+    bend_nodes: wp.array(dtype=int),
+    bend_values: wp.array(dtype=float),
+    dt: float,
+    x: wp.array(dtype=wp.vec3),
+):
+    """One Newton step on one node's share of the incremental potential
+
+        G_i(x_i) = m_i / (2 dt^2) |x_i - y_i|^2 + E_springs + E_dampers + E_hinges,
+
+    the other nodes held (nodes of one colour share no element or hinge, so a colour runs in
+    parallel). ``spring_*`` lists each node's elements: the other node and (l0 [m], k [N/m],
+    c [kg/s]). Springs contribute k (l - l0) d and the Hessian k (d d^T + max(0, 1 - l0/l)
+    (I - d d^T)) (projected to be positive semi-definite); the paper's dampers
+    c (v_k - v_i) with v = (x - x(t)) / dt contribute c / dt I. The hinges' energy is the
+    quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h K_h K_h^T
+    (``bend_*``: row i of L, its diagonal included), so they add (L x)_i to the gradient and
+    L_ii I to the Hessian.
+    """
+    i = colored[offset + wp.tid()]
+    if inv_mass[i] == 0.0:
+        return
+    xi = x[i]
+    h2 = dt * dt
+    m = mass[i]
+    grad = (m / h2) * (xi - y[i])
+    hess = (m / h2) * wp.identity(n=3, dtype=float)
+    vi = xi - x_start[i]
+    diagonal = float(0.0)
+    for j in range(spring_offsets[i], spring_offsets[i + 1]):
+        k = spring_other[j]
+        p = spring_params[j]
+        xk = x[k]
+        d = xk - xi
+        length = wp.length(d)
+        if length > 1.0e-12:
+            u = d / length
+            grad -= p[1] * (length - p[0]) * u
+            slack = wp.max(0.0, 1.0 - p[0] / length)
+            hess += (p[1] * (1.0 - slack)) * wp.outer(u, u)
+            diagonal += p[1] * slack
+        c = p[2] / dt
+        grad -= c * ((xk - x_start[k]) - vi)
+        diagonal += c
+    for j in range(bend_offsets[i], bend_offsets[i + 1]):
+        k = bend_nodes[j]
+        grad += bend_values[j] * x[k]
+        if k == i:
+            diagonal += bend_values[j]
+    hess += diagonal * wp.identity(n=3, dtype=float)
+    det = wp.determinant(hess)
+    if det > 1.0e-20:
+        x[i] = xi - wp.inverse(hess) * grad
+
+
+@wp.kernel
+def step_velocity(x_start: wp.array(dtype=wp.vec3), x_end: wp.array(dtype=wp.vec3), dt: float,
+                  x_out: wp.array(dtype=wp.vec3), v_out: wp.array(dtype=wp.vec3)):
+    """v* = (x_end - x(t)) / dt, and x_out = x(t) for the collision pass and eq. (4)."""
+    i = wp.tid()
+    x_out[i] = x_start[i]
+    v_out[i] = (x_end[i] - x_start[i]) / dt
+
+
+@wp.kernel
+def chebyshev_blend(x: wp.array(dtype=wp.vec3), previous: wp.array(dtype=wp.vec3), before: wp.array(dtype=wp.vec3),
+                    omega: float):
+    """Chebyshev semi-iterative acceleration of the sweeps (Wang 2015; used by VBD):
+    x_k <- omega (x_k - x_{k-2}) + x_{k-2}; then shift the history (``previous`` = x_{k-1}
+    becomes x_{k-2} in ``before``, and x_k becomes ``previous``)."""
+    i = wp.tid()
+    xk = omega * (x[i] - before[i]) + before[i]
+    x[i] = xk
+    before[i] = previous[i]
+    previous[i] = xk

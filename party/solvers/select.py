@@ -1,0 +1,32 @@
+"""Choosing a solver by name (the ``--solver`` option)."""
+
+from __future__ import annotations
+
+from ..collision import CollisionSettings
+from ..errors import InvalidInput
+from ..model import Model
+from .aero import Air
+from .explicit import SolverExplicit
+from .implicit import SolverImplicit
+
+SOLVERS = ("explicit", "implicit")
+"""explicit: the paper's integrator (eqs. 3-5), the faithful reference; implicit: backward
+Euler by Vertex Block Descent, for large steps."""
+
+DEFAULT_DT = {"explicit": 1.0e-4, "implicit": 1.0 / 300.0}
+"""Default time step [s]: the paper's for the explicit solver; a 60 Hz frame in 5 substeps for
+the implicit one."""
+
+
+def check_solver(name: str) -> str:
+    if name not in SOLVERS:
+        raise InvalidInput(f"unknown solver {name!r}; known: {', '.join(SOLVERS)}")
+    return name
+
+
+def make_solver(name: str, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
+                air: Air | None = None):
+    """The solver ``name`` (see :data:`SOLVERS`) for ``model``."""
+    if check_solver(name) == "explicit":
+        return SolverExplicit(model, collision=collision, air=air)
+    return SolverImplicit(model, collision=collision, air=air)

@@ -1,0 +1,82 @@
+"""The end of every step, whichever solver proposed its velocities: the plastic limit, then
+Collision() (eq. 5), then the position update (eq. 4)."""
+
+from __future__ import annotations
+
+import numpy as np
+import warp as wp
+
+from ..collision import CollisionPipeline, CollisionSettings
+from ..model import Model, State
+from .explicit.kernels import advance_positions, count_over_limit, plastic_limit
+
+PLASTIC_TOLERANCE = 5.0e-5
+"""Relative length beyond the plastic limit left to the next step's sweeps (0.005 %)."""
+
+
+class StepEnd:
+    """Filters proposed velocities v* and moves the nodes:
+
+        v* <- f_plas(v*)                 plastic limit (section 5, figure 5)
+        v(t + dt) = Collision(v*)        (5)
+        r(t + dt) = r(t) + v(t + dt) dt  (4)
+
+    Args:
+        model: The model.
+        collision: Collision settings (section 6); ``None`` switches collision off.
+        plastic_passes: Most sweeps over the element colours per step enforcing the plastic
+            limit (sweeps stop as soon as no element is beyond it).
+        limit_after_contact: Enforce the plastic limit once more after Collision(), then run
+            Collision() once more. The collision response (friction, and the position
+            correction along the body normal) may undo a limit correction of a node in contact;
+            at the paper's dt the loss is negligible, but over a large step it lets cloth in
+            contact stretch step after step (seen: 27 % beyond rest in 30 steps of 1/300 s).
+    """
+
+    def __init__(self, model: Model, collision: CollisionSettings | None, plastic_passes: int,
+                 limit_after_contact: bool = False) -> None:
+        self.model = model
+        self.collision = CollisionPipeline(model, collision) if collision is not None else None
+        self.plastic_passes = plastic_passes
+        self._over_limit = wp.zeros(1, dtype=int, device=model.device)
+        self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
+        self._has_limit = bool((model.host["element_params"][:, 3] < 1e29).any()) if model.element_count else False
+        self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
+
+    def finish(self, state_in: State, state_out: State, dt: float) -> None:
+        """``state_out`` holds r(t) and v*; leave r(t + dt) and v(t + dt) there."""
+        m = self.model
+        dev = m.device
+        if self._has_limit:
+            self._apply_plastic_limit(state_out, dt)
+        wp.copy(state_out.collider_q, state_in.collider_q)
+        wp.copy(state_out.collider_qd, state_in.collider_qd)
+        if self.collision is not None:
+            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
+        if self.limit_after_contact:
+            self._apply_plastic_limit(state_out, dt)
+            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
+        wp.launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
+        if self._moving_colliders:
+            wp.launch(advance_positions, dim=len(state_out.collider_q),
+                      inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
+        state_out.time = state_in.time + dt
+
+    def _apply_plastic_limit(self, state: State, dt: float) -> None:
+        """Gauss-Seidel sweeps over the element colours until no element would end the step
+        beyond its limit (to :data:`PLASTIC_TOLERANCE`), at most ``plastic_passes`` sweeps. Reads one
+        counter from the device per sweep; no sweep runs while the net is within its limits."""
+        m = self.model
+        offsets = m.element_color_offsets
+        for _ in range(self.plastic_passes):
+            self._over_limit.zero_()
+            wp.launch(count_over_limit, dim=m.element_count,
+                      inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes, m.element_max_length,
+                              dt, PLASTIC_TOLERANCE, self._over_limit], device=m.device)
+            if int(self._over_limit.numpy()[0]) == 0:
+                return
+            for c in range(len(offsets) - 1):
+                wp.launch(plastic_limit, dim=offsets[c + 1] - offsets[c],
+                          inputs=[m.element_colored, offsets[c], state.node_q, state.node_qd,
+                                  m.node_inv_mass, m.element_nodes, m.element_max_length, dt], device=m.device)
+
