@@ -8,10 +8,12 @@ from party.collision import CollisionSettings
 from party.errors import InvalidInput
 from party.fabric import wool_flannel
 from party.model import ModelBuilder
-from party.solvers import SolverExplicit
+from party.solvers import SolverExplicit, SolverImplicit
 from conftest import simulate
 
 MU, SIGMA, EPS, DT = 0.6, 0.03, 3.0e-3, 1.0e-4
+SOLVERS = {"explicit": SolverExplicit, "implicit": SolverImplicit}
+both_solvers = pytest.mark.parametrize("solver", sorted(SOLVERS))
 
 
 def paper_response(v, n, mu, sigma, v_body):
@@ -27,68 +29,83 @@ def paper_response(v, n, mu, sigma, v_body):
     return vt - sigma * vn + v_body
 
 
-def node_over_floor(velocity, floor_velocity=(0.0, 0.0, 0.0), height=0.005):
+def node_over_floor(velocity, floor_velocity=(0.0, 0.0, 0.0), height=0.005, solver="explicit", dt=DT):
     fabric = wool_flannel()
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     b.add_node((0.0, 0.0, height), 1e-4, fabric=fabric)
     slab = floor(0.0, size=2.0)
     b.add_collider(type(slab)(slab.name, slab.vertices, slab.faces, np.asarray(floor_velocity, float)))
     model = b.finalize("cpu")
-    solver = SolverExplicit(model, collision=CollisionSettings(cloth=False))
+    integrator = SOLVERS[solver](model, collision=CollisionSettings(cloth=False))
     state, out = model.state(velocity=velocity), model.state()
-    solver.step(state, out, model.control(), DT)
+    integrator.step(state, out, model.control(), dt)
     return out
 
 
+@both_solvers
 @pytest.mark.parametrize("velocity", [
     (1.0, 0.5, -30.0),   # inside the friction cone: sticks
     (25.0, 0.0, -30.0),  # outside: slides, |v_t| reduced by mu |v_n|
     (0.0, 0.0, -30.0),   # head-on
 ])
-def test_static_floor_response_is_eqs_8_to_12(velocity):
-    out = node_over_floor(velocity)
+def test_static_floor_response_is_eqs_8_to_12(velocity, solver):
+    out = node_over_floor(velocity, solver=solver)
     expected = paper_response(np.array(velocity), np.array([0, 0, 1.0]), MU, SIGMA, np.zeros(3))
     assert np.allclose(out.velocities()[0], expected, atol=1e-4)
     assert out.positions()[0, 2] >= EPS - 1e-6
 
 
-def test_inside_and_outside_cone_differ_as_the_paper_says():
-    stick = node_over_floor((10.0, 0.0, -30.0)).velocities()[0]
-    slide = node_over_floor((20.0, 0.0, -30.0)).velocities()[0]
+@both_solvers
+def test_inside_and_outside_cone_differ_as_the_paper_says(solver):
+    stick = node_over_floor((10.0, 0.0, -30.0), solver=solver).velocities()[0]
+    slide = node_over_floor((20.0, 0.0, -30.0), solver=solver).velocities()[0]
     assert stick[0] == pytest.approx(0.0, abs=1e-5)
     assert slide[0] == pytest.approx(20.0 - MU * 30.0, rel=1e-4)
 
 
-def test_moving_body_velocity_is_added_back():
+@both_solvers
+def test_moving_body_velocity_is_added_back(solver):
     v_floor = np.array([2.0, -1.0, 0.5])
-    out = node_over_floor((15.0, 3.0, -30.0), floor_velocity=v_floor)
+    out = node_over_floor((15.0, 3.0, -30.0), floor_velocity=v_floor, solver=solver)
     expected = paper_response(np.array([15.0, 3.0, -30.0]), np.array([0, 0, 1.0]), MU, SIGMA, v_floor)
     assert np.allclose(out.velocities()[0], expected, atol=1e-4)
 
 
-def test_fast_node_does_not_tunnel_through_thin_plate():
+def test_large_step_friction_cone_is_the_papers():
+    """The implicit solver at a 1/300 s step: the same cone decides sticking and sliding."""
+    for velocity in [(0.5, 0.2, -1.5), (2.0, 0.0, -1.5)]:
+        out = node_over_floor(velocity, solver="implicit", dt=1.0 / 300.0, height=0.006)
+        expected = paper_response(np.array(velocity), np.array([0, 0, 1.0]), MU, SIGMA, np.zeros(3))
+        assert np.allclose(out.velocities()[0], expected, atol=1e-4)
+        assert out.positions()[0, 2] >= EPS - 1e-6
+
+
+@both_solvers
+def test_fast_node_does_not_tunnel_through_thin_plate(solver):
     """A 1 mm plate; the node moves 5 mm per step (50 m/s), more than eps per step and more
     than the plate is thick."""
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     b.add_node((0.0, 0.0, 0.05), 1e-4, fabric=wool_flannel())
     b.add_collider(box((0.5, 0.5, 0.001), center=(0, 0, 0)))
     model = b.finalize("cpu")
-    solver = SolverExplicit(model, collision=CollisionSettings(cloth=False))
+    integrator = SOLVERS[solver](model, collision=CollisionSettings(cloth=False))
     state, out = model.state(velocity=(0.3, 0.0, -50.0)), model.state()
     for _ in range(40):
-        solver.step(state, out, model.control(), DT)
+        integrator.step(state, out, model.control(), DT)
         state, out = out, state
     z = state.positions()[0, 2]
     assert z >= 0.0005 + EPS - 1e-6
 
 
-def test_resting_node_stays_eps_above_under_gravity():
+@pytest.mark.parametrize("solver,dt,steps", [("explicit", DT, 3000), ("implicit", 1.0 / 300.0, 90)])
+def test_resting_node_stays_eps_above_under_gravity(solver, dt, steps):
     b = ModelBuilder()
     b.add_node((0.0, 0.0, 0.01), 1e-4, fabric=wool_flannel())
     b.add_collider(floor(0.0))
     model = b.finalize("cpu")
-    state = simulate(model, SolverExplicit(model, collision=CollisionSettings(cloth=False)), 3000, DT)
-    assert state.positions()[0, 2] == pytest.approx(EPS, abs=1e-5)
+    state = simulate(model, SOLVERS[solver](model, collision=CollisionSettings(cloth=False)), steps, dt)
+    # within half of one step's free fall g dt^2 (0.1 mm at 1/300 s, 0.05 um at 1e-4 s) or 10 um
+    assert state.positions()[0, 2] == pytest.approx(EPS, abs=max(1e-5, 0.5 * 9.81 * dt * dt))
     assert abs(state.velocities()[0, 2]) < 0.05
 
 

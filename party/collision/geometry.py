@@ -74,3 +74,26 @@ def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: flo
     else:
         vt = vt * ((speed_t - limit) / speed_t)
     return vt - sigma * vn
+
+
+@wp.func
+def segment_hits_triangle(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> bool:
+    """Strict segment-triangle intersection (Moller-Trumbore on the segment)."""
+    d = q - p
+    e1 = b - a
+    e2 = c - a
+    h = wp.cross(d, e2)
+    det = wp.dot(e1, h)
+    if wp.abs(det) < 1.0e-18:
+        return False
+    inv = 1.0 / det
+    s = p - a
+    u = inv * wp.dot(s, h)
+    if u < 0.0 or u > 1.0:
+        return False
+    qv = wp.cross(s, e1)
+    w = inv * wp.dot(d, qv)
+    if w < 0.0 or u + w > 1.0:
+        return False
+    t = inv * wp.dot(e2, qv)
+    return t > 0.0 and t < 1.0

@@ -46,6 +46,7 @@ class CollisionSettings:
     max_cells: int = 256
     exclude_ring: int = 0
     broad_phase: str = "intervals"
+    crossing_guard: bool = True
 
     def __post_init__(self) -> None:
         if self.broad_phase not in ("intervals", "bvh"):
@@ -101,15 +102,16 @@ class CollisionPipeline:
             self.dx = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.hits = wp.zeros(n, dtype=int, device=dev)
 
-    def apply(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
+    def apply(self, x: wp.array, v: wp.array, state: State, dt: float, *, search: bool = True) -> None:
         """Collision(): modify velocities ``v`` (and start positions ``x``) in place.
 
         Repeats the interval-list search when a node may have left the region searched last
-        time (this reads one flag from the device)."""
+        time (this reads one flag from the device); ``search=False`` reuses the last search's
+        candidates (a second pass within one step)."""
         m = self.model
         dev = m.device
         self.contacts.zero_()
-        if self.has_body or self.has_cloth:
+        if search and (self.has_body or self.has_cloth):
             wp.launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag], device=dev)
             if self.body_moving or int(self._flag.numpy()[0]):
                 self._search(x, v, state, dt)

@@ -8,6 +8,7 @@ import warp as wp
 
 from ..body.collider import ColliderMesh
 from ..body.probe import ColliderProbe
+from ..collision.geometry import segment_hits_triangle
 
 
 def collider_inside_and_distance(points: np.ndarray, collider: ColliderMesh, device: str = "cpu",
@@ -19,29 +20,6 @@ def collider_inside_and_distance(points: np.ndarray, collider: ColliderMesh, dev
 def body_penetrations(points: np.ndarray, colliders, device: str = "cpu") -> int:
     """Number of nodes inside any collider."""
     return ColliderProbe(colliders, device).penetrations(points)
-
-
-@wp.func
-def _segment_hits_triangle(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> bool:
-    """Strict segment-triangle intersection (Moller-Trumbore on the segment)."""
-    d = q - p
-    e1 = b - a
-    e2 = c - a
-    h = wp.cross(d, e2)
-    det = wp.dot(e1, h)
-    if wp.abs(det) < 1.0e-18:
-        return False
-    inv = 1.0 / det
-    s = p - a
-    u = inv * wp.dot(s, h)
-    if u < 0.0 or u > 1.0:
-        return False
-    qv = wp.cross(s, e1)
-    w = inv * wp.dot(d, qv)
-    if w < 0.0 or u + w > 1.0:
-        return False
-    t = inv * wp.dot(e2, qv)
-    return t > 0.0 and t < 1.0
 
 
 @wp.kernel
@@ -62,7 +40,7 @@ def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.a
         c = tris[t, 2]
         if a == i or a == k or b == i or b == k or c == i or c == k:
             continue
-        if _segment_hits_triangle(p, q, points[a], points[b], points[c]):
+        if segment_hits_triangle(p, q, points[a], points[b], points[c]):
             wp.atomic_add(count, 0, 1)
             crossed[e] = 1
 

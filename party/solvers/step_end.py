@@ -7,6 +7,7 @@ import numpy as np
 import warp as wp
 
 from ..collision import CollisionPipeline, CollisionSettings
+from ..collision.crossing_guard import CrossingGuard
 from ..model import Model, State
 from .explicit.kernels import advance_positions, count_over_limit, plastic_limit
 
@@ -20,6 +21,7 @@ class StepEnd:
         v* <- f_plas(v*)                 plastic limit (section 5, figure 5)
         v(t + dt) = Collision(v*)        (5)
         r(t + dt) = r(t) + v(t + dt) dt  (4)
+        crossing guard                   (ours; :mod:`party.collision.crossing_guard`)
 
     Args:
         model: The model.
@@ -42,6 +44,8 @@ class StepEnd:
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = bool((model.host["element_params"][:, 3] < 1e29).any()) if model.element_count else False
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
+        guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
+        self.guard = CrossingGuard(model) if guarded else None
 
     def finish(self, state_in: State, state_out: State, dt: float) -> None:
         """``state_out`` holds r(t) and v*; leave r(t + dt) and v(t + dt) there."""
@@ -55,8 +59,10 @@ class StepEnd:
             self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
         if self.limit_after_contact:
             self._apply_plastic_limit(state_out, dt)
-            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
+            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, search=False)
         wp.launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
+        if self.guard is not None:
+            self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd, self.collision.cloth_candidate_count)
         if self._moving_colliders:
             wp.launch(advance_positions, dim=len(state_out.collider_q),
                       inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)

@@ -1,0 +1,234 @@
+"""party against Blender and Newton, measured in one run.
+
+    python benchmarks/compare.py [--grids 64 100] [--self-collision off on]
+                                 [--systems party-implicit party-explicit blender newton]
+                                 [--garments/--no-garments] [--out benchmarks/results]
+
+Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius
+0.3 m for 1 s (``party run sphere-drop``; ``benchmarks/peers/`` for the peers). Each peer runs
+in its own virtual environment under ``benchmarks/.venvs/``, made here if missing (bpy 5.0.1
+needs Python 3.11; newton 1.8.0). Printed per scene and system: wall seconds per simulated
+second with start-up (imports, set-up, the first frame's kernel compilation) excluded and
+reported apart, the ratio to party's implicit solver, and the outcome checked the same way
+for all (smallest distance of a node from the sphere's centre, nodes inside the sphere, final
+height range).
+
+Scenes (b) and (c), party only: the reference dress (``party/data/patterns``) on the default
+dress form and GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj`` (from
+``../shared/data/garmentcode``, skipped when absent) sewn and draped to rest, wall seconds
+in all, against GarmentCode's own 1,086 s for the flare dress.
+
+Writes ``OUT/compare.csv`` and ``OUT/compare.png`` (a bar chart).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+VENVS = HERE / ".venvs"
+PEERS = {"blender": (HERE / "peers" / "blender_sphere.py", ["bpy==5.0.1", "numpy<2"]),
+         "newton": (HERE / "peers" / "newton_sphere.py", ["newton==1.8.0"])}
+SHARED = HERE.parent.parent / "shared" / "data" / "garmentcode"
+GARMENTCODE_SECONDS = 1086.0
+"""GarmentCode's own simulator on dress_sleeves_flare on this machine's kind (its README)."""
+SPHERE_RADIUS = 0.3
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--grids", type=int, nargs="+", default=[64, 100])
+    parser.add_argument("--self-collision", nargs="+", choices=["off", "on"], default=["off", "on"])
+    parser.add_argument("--systems", nargs="+", default=["party-implicit", "party-explicit", "blender", "newton"],
+                        choices=["party-implicit", "party-explicit", "blender", "newton"])
+    parser.add_argument("--garments", action=argparse.BooleanOptionalAction, default=True)
+    parser.add_argument("--out", type=Path, default=HERE / "results")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    rows = []
+    for grid in args.grids:
+        for self_collision in args.self_collision:
+            scene = f"sphere-drop {grid}x{grid} self {self_collision}"
+            for system in args.systems:
+                print(f"{scene}: {system} ...", flush=True)
+                result = run_sphere(system, grid, self_collision == "on")
+                rows.append({"scene": scene, "system": system, **result})
+                print(f"    {describe(rows[-1])}", flush=True)
+    if args.garments:
+        for label, pattern, body in garment_scenes():
+            for system in [s for s in args.systems if s.startswith("party")]:
+                print(f"{label}: {system} ...", flush=True)
+                rows.append({"scene": label, "system": system, **run_drape(pattern, body, system.split("-")[1])})
+                print(f"    {describe(rows[-1])}", flush=True)
+    report(rows, args.out)
+
+
+def run_sphere(system: str, grid: int, self_collision: bool) -> dict:
+    if system.startswith("party"):
+        return party_sphere(system.split("-")[1], grid, self_collision)
+    python = ensure_venv(system)
+    script, _ = PEERS[system]
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "result.npz"
+        command = [str(python), str(script)] + (["--"] if system == "blender" else [])
+        command += [str(grid), "1" if self_collision else "0", str(out)]
+        started = time.perf_counter()
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0 or not out.exists():
+            tail = (done.stderr or done.stdout).strip().splitlines()[-3:]
+            return {"error": f"{system} failed: {' / '.join(tail)}"}
+        data = np.load(out)
+        total = time.perf_counter() - started
+        return {"startup_seconds": float(total - data["wall_seconds"] * 1.0), "wall_per_simulated_second":
+                float(data["wall_seconds"] / data["simulated_seconds"]), **outcome(data["points"])}
+
+
+def party_sphere(solver: str, grid: int, self_collision: bool) -> dict:
+    import warp as wp
+
+    from party.scenes.sphere_drop import build
+
+    started = time.perf_counter()
+    scene = build(grid=grid, self_collision=self_collision, solver=solver)
+    state, scratch = scene.model.state(), scene.model.state()
+    control = scene.model.control()
+    steps = int(round(scene.duration / scene.dt))
+    first = max(int(round(scene.frame_interval / scene.dt)), 1)
+    for _ in range(first):
+        scene.solver.step(state, scratch, control, scene.dt)
+        state, scratch = scratch, state
+    wp.synchronize()
+    startup = time.perf_counter() - started
+    t = time.perf_counter()
+    for _ in range(steps - first):
+        scene.solver.step(state, scratch, control, scene.dt)
+        state, scratch = scratch, state
+    wp.synchronize()
+    wall = (time.perf_counter() - t) * steps / (steps - first)
+    return {"startup_seconds": startup, "wall_per_simulated_second": wall / scene.duration,
+            **outcome(state.positions())}
+
+
+def outcome(points: np.ndarray) -> dict:
+    r = np.linalg.norm(points, axis=1)
+    return {"nodes": int(len(points)), "min_distance_from_centre_m": float(r.min()),
+            "nodes_inside": int((r < SPHERE_RADIUS).sum()), "z_min_m": float(points[:, 2].min()),
+            "z_max_m": float(points[:, 2].max()), "nan": bool(np.isnan(points).any())}
+
+
+def garment_scenes():
+    from party.scenes.dress import pattern_path
+
+    yield "reference dress on dress form M", pattern_path(), "M"
+    flare = SHARED / "patterns" / "dress_sleeves_flare_specification.json"
+    if flare.exists():
+        yield "GarmentCode dress_sleeves_flare on mean_all", flare, str(SHARED / "bodies" / "mean_all.obj")
+    else:
+        print(f"(skipping the GarmentCode scene: {flare} not found)")
+
+
+def run_drape(pattern: Path, body: str, solver: str) -> dict:
+    import json
+
+    from party.fabric import wool_flannel
+    from party.scenes.drape import drape
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "drape"
+        summary = drape(pattern, body, wool_flannel(), out, spacing=0.02, images=False, progress=False, solver=solver)
+        summary = json.loads((out / "summary.json").read_text())
+    return {"wall_seconds_to_rest": summary["wall_seconds"], "nodes": summary["nodes"],
+            "max_seam_gap_mm": summary["max_seam_gap_mm"], "body_penetrations": summary["body_penetrations"],
+            "cloth_crossings": summary["cloth_crossings"], "ratio_to_garmentcode":
+            GARMENTCODE_SECONDS / summary["wall_seconds"]}
+
+
+def ensure_venv(peer: str) -> Path:
+    """The peer's interpreter, making its venv (``python -m venv`` + pip) on first use."""
+    venv = VENVS / peer
+    python = venv / "bin" / "python"
+    _, requirements = PEERS[peer]
+    if not python.exists():
+        if peer == "blender" and sys.version_info[:2] != (3, 11):
+            raise SystemExit("bpy 5.0.1 needs Python 3.11; run this benchmark with python3.11")
+        print(f"    creating {venv} ({' '.join(requirements)}); this downloads several hundred MB once", flush=True)
+        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+        subprocess.run([str(python), "-m", "pip", "install", "-q", *requirements], check=True)
+    return python
+
+
+def describe(row: dict) -> str:
+    if "error" in row:
+        return row["error"]
+    if "wall_seconds_to_rest" in row:
+        return (f"{row['nodes']} nodes, {row['wall_seconds_to_rest']:.1f} s to rest, seam gap {row['max_seam_gap_mm']:.1f} mm, "
+                f"penetrations {row['body_penetrations']}, crossings {row['cloth_crossings']}, "
+                f"{row['ratio_to_garmentcode']:.1f}x GarmentCode's 1,086 s")
+    return (f"{row['wall_per_simulated_second']:.2f} s per simulated s (start-up {row['startup_seconds']:.1f} s), "
+            f"min r {row['min_distance_from_centre_m']:.4f} m, inside {row['nodes_inside']}, "
+            f"z {row['z_min_m']:.3f}..{row['z_max_m']:.3f} m")
+
+
+def report(rows: list[dict], out: Path) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    reference = {r["scene"]: r.get("wall_per_simulated_second") for r in rows if r["system"] == "party-implicit"}
+    table = Table(title="party vs Blender vs Newton (2-core CPU unless stated)")
+    for column in ("scene", "system", "s per sim s", "x party-implicit", "start-up s", "min r m", "inside", "z range m"):
+        table.add_column(column)
+    for r in rows:
+        if "wall_per_simulated_second" in r:
+            ratio = r["wall_per_simulated_second"] / reference[r["scene"]] if reference.get(r["scene"]) else float("nan")
+            r["ratio_to_party_implicit"] = ratio
+            table.add_row(r["scene"], r["system"], f"{r['wall_per_simulated_second']:.2f}", f"{ratio:.2f}",
+                          f"{r['startup_seconds']:.1f}", f"{r['min_distance_from_centre_m']:.4f}", str(r["nodes_inside"]),
+                          f"{r['z_min_m']:.3f}..{r['z_max_m']:.3f}")
+        else:
+            table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "")
+    Console(width=170).print(table)
+    keys = sorted({k for r in rows for k in r})
+    with open(out / "compare.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=keys)
+        writer.writeheader()
+        writer.writerows(rows)
+    chart(rows, out / "compare.png")
+    print(f"wrote {out / 'compare.csv'} and {out / 'compare.png'}")
+
+
+def chart(rows: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    timed = [r for r in rows if "wall_per_simulated_second" in r]
+    scenes = list(dict.fromkeys(r["scene"] for r in timed))
+    systems = list(dict.fromkeys(r["system"] for r in timed))
+    fig, ax = plt.subplots(figsize=(max(6, 2.2 * len(scenes)), 4.5))
+    width = 0.8 / max(len(systems), 1)
+    for k, system in enumerate(systems):
+        values = [next((r["wall_per_simulated_second"] for r in timed if r["scene"] == s and r["system"] == system), 0.0)
+                  for s in scenes]
+        ax.bar(np.arange(len(scenes)) + k * width, values, width, label=system)
+    ax.set_xticks(np.arange(len(scenes)) + width * (len(systems) - 1) / 2, scenes, rotation=15, ha="right", fontsize=8)
+    ax.set_ylabel("wall seconds per simulated second")
+    ax.set_yscale("log")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(HERE.parent))
+    main()

@@ -1,0 +1,127 @@
+"""A last line of defence against cloth passing through cloth.
+
+The paper's cloth-cloth detection (section 6.3) tests each node against triangles along its
+step; two edges can still pass through each other between nodes, more so over a large step.
+After a step, the guard looks for mesh edges that pass through a triangle (sharing no node)
+at the end of the step but did not at its start (among the edges with a node near another
+layer: one whose collision search found cloth triangles along its step), and sends the nodes of each such pair back
+to where the step began, at rest. It repeats until no new crossing is left: at worst every
+node is back at its start, which had none, so no step ever creates a crossing. Crossings
+present before a step (from a set-up) are left alone and not counted as new.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import warp as wp
+
+from ..model import Model
+from .geometry import segment_hits_triangle
+
+MAX_ROUNDS = 16
+"""Rounds of check-and-revert per step; a round reverts every pair found, so a step needs
+more than a few only when many layers pile up at once."""
+
+
+@wp.kernel
+def _check_edges(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
+                 edges: wp.array(dtype=wp.vec2i), near: wp.array(dtype=int), crossed_before: wp.array(dtype=int),
+                 crossed_now: wp.array(dtype=int), revert: wp.array(dtype=int), new_count: wp.array(dtype=int)):
+    e = wp.tid()
+    i = edges[e][0]
+    k = edges[e][1]
+    crossed_now[e] = 0
+    if near[i] == 0 and near[k] == 0 and crossed_before[e] == 0:
+        return
+    p = points[i]
+    q = points[k]
+    query = wp.mesh_query_aabb(mesh, wp.min(p, q), wp.max(p, q))
+    t = int(0)
+    while wp.mesh_query_aabb_next(query, t):
+        a = tris[t, 0]
+        b = tris[t, 1]
+        c = tris[t, 2]
+        if a == i or a == k or b == i or b == k or c == i or c == k:
+            continue
+        if segment_hits_triangle(p, q, points[a], points[b], points[c]):
+            crossed_now[e] = 1
+            if crossed_before[e] == 0:
+                wp.atomic_add(new_count, 0, 1)
+                revert[i] = 1
+                revert[k] = 1
+                revert[a] = 1
+                revert[b] = 1
+                revert[c] = 1
+
+
+@wp.kernel
+def _revert(x_start: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), revert: wp.array(dtype=int),
+            x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), reverted: wp.array(dtype=int)):
+    i = wp.tid()
+    if revert[i] != 0 and inv_mass[i] > 0.0:
+        x[i] = x_start[i]
+        v[i] = wp.vec3(0.0)
+        reverted[i] = 1
+    revert[i] = 0
+
+
+class CrossingGuard:
+    """Checks each step's end for new edge-through-triangle crossings and reverts their nodes."""
+
+    def __init__(self, model: Model) -> None:
+        self.model = model
+        dev = model.device
+        tri = model.triangles
+        edges = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+        self.edge_count = len(edges)
+        self.edges = wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=dev)
+        self.points = wp.clone(model.node_rest_points)
+        self.mesh = wp.Mesh(points=self.points, indices=wp.array(tri.ravel().astype(np.int32), dtype=int, device=dev))
+        self.crossed_before = wp.zeros(self.edge_count, dtype=int, device=dev)
+        self.crossed_now = wp.zeros(self.edge_count, dtype=int, device=dev)
+        self.revert = wp.zeros(model.node_count, dtype=int, device=dev)
+        self.reverted = wp.zeros(model.node_count, dtype=int, device=dev)
+        self.new_count = wp.zeros(1, dtype=int, device=dev)
+        self.reverts = 0
+        self._primed = False
+        self._near = wp.ones(model.node_count, dtype=int, device=dev)
+
+    def prime(self, x: wp.array) -> None:
+        """Record which edges cross at ``x`` (the state before the first step)."""
+        near, self._near = self._near, wp.ones(self.model.node_count, dtype=int, device=self.model.device)
+        self._check(x)
+        self._near = near
+        wp.copy(self.crossed_before, self.crossed_now)
+        self._primed = True
+
+    def apply(self, x_start: wp.array, x: wp.array, v: wp.array, near: wp.array) -> int:
+        """Revert nodes of new crossings at the end of a step (``x``, ``v`` in place) to
+        ``x_start`` at rest; returns the number of nodes reverted (syncs with the device).
+        Only edges with a node ``near`` another layer (non-zero: the node's cloth-collision
+        search found triangles along its step) are checked."""
+        self._near = near
+        if not self._primed:
+            self.prime(x_start)
+        m = self.model
+        self.reverted.zero_()
+        any_new = False
+        for _ in range(MAX_ROUNDS):
+            if self._check(x) == 0:
+                break
+            any_new = True
+            wp.launch(_revert, dim=m.node_count, inputs=[x_start, m.node_inv_mass, self.revert, x, v, self.reverted],
+                      device=m.device)
+        wp.copy(self.crossed_before, self.crossed_now)
+        count = int(self.reverted.numpy().sum()) if any_new else 0
+        self.reverts += count
+        return count
+
+    def _check(self, x: wp.array) -> int:
+        m = self.model
+        wp.copy(self.points, x)
+        self.mesh.refit()
+        self.new_count.zero_()
+        wp.launch(_check_edges, dim=self.edge_count,
+                  inputs=[self.mesh.id, self.points, m.triangle_nodes, self.edges, self._near, self.crossed_before,
+                          self.crossed_now, self.revert, self.new_count], device=m.device)
+        return int(self.new_count.numpy()[0])
