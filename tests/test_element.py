@@ -89,7 +89,7 @@ def test_without_limit_the_same_load_overstretches():
 def test_critical_time_step_scales_with_spacing():
     """dt_crit = 2 / omega_max: omega_max = 2 sqrt(k/m) for an interior chain of the net
     (k = K, m = rho h^2), a little higher at its half-mass edges; so dt_crit is proportional
-    to the spacing h and close to 1 / sqrt(K / (rho h^2))."""
+    to the spacing h and close to 1 / sqrt(K / (rho h^2)) (undamped)."""
     from party.fabric import wool_flannel
     from party.meshing import rectangular_net
 
@@ -97,8 +97,32 @@ def test_critical_time_step_scales_with_spacing():
     for spacing in (0.02, 0.01):
         net = rectangular_net(0.4, 0.4, spacing)
         b = ModelBuilder()
-        b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
+        b.add_cloth(net, wool_flannel().with_(damping=0.0), np.c_[net.uv, np.zeros(net.node_count)])
         found[spacing] = SolverExplicit(b.finalize("cpu"), collision=None).critical_time_step()
         k, m = wool_flannel().tensile_warp, wool_flannel().areal_density * spacing**2
         assert 0.9 < found[spacing] * math.sqrt(k / m) <= 1.0
     assert found[0.02] / found[0.01] == pytest.approx(2.0, rel=0.02)
+
+
+@pytest.mark.parametrize("c", [0.0, 2.0e3])
+def test_critical_time_step_with_damping_is_the_stability_edge(c):
+    """One free node on a spring-damper to a pin: bounded at 0.99 dt_crit (near the edge the
+    undamped speed may swing up to 1 / sqrt(1 - 0.99^2) = 7 times its start), growing without
+    bound at 1.02 dt_crit."""
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    pin = b.add_node((0.0, 0.0, 0.0), 1.0)
+    node = b.add_node((0.1, 0.0, 0.0), 1.0)
+    b.add_element(pin, node, stiffness=1.0e6, damping=c, rest_length=0.1)
+    b.pin([pin])
+    model = b.finalize("cpu")
+    solver = SolverExplicit(model, collision=None)
+    dt_crit = solver.critical_time_step()
+    w2 = 1.0e6
+    assert dt_crit == pytest.approx((math.sqrt(c * c + 4 * w2) - c) / w2, rel=1e-6)
+    for factor, grows in ((0.99, False), (1.02, True)):
+        state = model.state(velocity=(1.0, 0.0, 0.0))
+        scratch = model.state()
+        for _ in range(3000):
+            solver.step(state, scratch, model.control(), factor * dt_crit)
+            state, scratch = scratch, state
+        assert (not np.abs(state.velocities()[1]).max() < 100.0) == grows  # NaN counts as grown

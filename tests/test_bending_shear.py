@@ -1,0 +1,83 @@
+"""Bending hinges and shear diagonals against plate and membrane theory."""
+
+import numpy as np
+import pytest
+import warp as wp
+
+from party.fabric import library
+from party.meshing import rectangular_net
+from party.meshing.hinges import bending_energy, hinges
+from party.model import ModelBuilder
+from party.solvers.explicit.kernels import hinge_forces
+from party.solvers.implicit.solver import bending_matrix
+from party.solvers.relax import total_energy
+
+B = 1.0e-5  # N*m
+
+
+def cylinder(net, radius, angle_deg):
+    """The flat net wrapped on a cylinder of ``radius`` whose curvature runs at ``angle_deg``
+    to the warp: arc length preserved."""
+    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+    u = net.uv[:, 0] * c + net.uv[:, 1] * s
+    v = -net.uv[:, 0] * s + net.uv[:, 1] * c
+    return np.c_[radius * np.sin(u / radius), v, radius * (1.0 - np.cos(u / radius))]
+
+
+@pytest.mark.parametrize("angle", [0.0, 90.0])
+def test_bending_along_the_grain_stores_the_plate_energy(angle):
+    """A plate of rigidity B bent to radius R stores B / (2 R^2) per unit area."""
+    net = rectangular_net(0.4, 0.4, 0.005)
+    nodes, weights, scale = hinges(net)
+    radius = 0.3
+    energy = bending_energy(cylinder(net, radius, angle), nodes, weights, scale, B)
+    assert energy == pytest.approx(B / (2 * radius**2) * 0.16, rel=0.015)
+
+
+def test_flat_cloth_in_any_pose_stores_no_bending_energy(rng):
+    net = rectangular_net(0.2, 0.1, 0.01)
+    nodes, weights, scale = hinges(net)
+    rotation = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    pose = np.c_[net.uv, np.zeros(net.node_count)] @ rotation.T + rng.normal(size=3)
+    assert bending_energy(pose, nodes, weights, scale, B) < 1e-18
+
+
+def test_hinge_forces_are_minus_the_energy_gradient(rng):
+    net = rectangular_net(0.06, 0.06, 0.02)
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    points = np.c_[net.uv, 0.003 * rng.normal(size=net.node_count)]
+    b.add_cloth(net, library()["denim"], points)
+    model = b.finalize("cpu")
+    h = model.host
+    forces = wp.zeros(model.node_count, dtype=wp.vec3, device="cpu")
+    wp.launch(hinge_forces, dim=model.hinge_count,
+              inputs=[model.node_rest_points, model.hinge_nodes, model.hinge_weights, model.hinge_stiffness, forces],
+              device="cpu")
+
+    def energy(p):
+        k = np.einsum("hk,hkc->hc", h["hinge_weights"], p[h["hinge_nodes"]])
+        return 0.5 * np.sum(h["hinge_stiffness"] * np.sum(k * k, axis=1))
+
+    gradient = np.zeros_like(points)
+    step = 1e-6
+    for i in range(net.node_count):
+        for c in range(3):
+            plus, minus = points.copy(), points.copy()
+            plus[i, c] += step
+            minus[i, c] -= step
+            gradient[i, c] = (energy(plus) - energy(minus)) / (2 * step)
+    assert np.allclose(forces.numpy(), -gradient, atol=1e-6 * np.abs(gradient).max())
+    L = bending_matrix(model)
+    assert 0.5 * np.sum(points * (L @ points)) == pytest.approx(energy(points), rel=1e-5)
+
+
+def test_shear_diagonals_give_the_fabrics_shear_stiffness():
+    """Simple shear by a small angle gamma stores G gamma^2 / 2 per unit area."""
+    fabric = library()["cotton"].with_(bending_rigidity=0.0)
+    net = rectangular_net(0.2, 0.1, 0.01)
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    gamma = 0.01
+    b.add_cloth(net, fabric, np.c_[net.uv[:, 0] + gamma * net.uv[:, 1], net.uv[:, 1], np.zeros(net.node_count)])
+    model = b.finalize("cpu")
+    energy = total_energy(model, model.host["points"])
+    assert energy == pytest.approx(0.5 * fabric.shear * gamma**2 * 0.02, rel=0.02)
