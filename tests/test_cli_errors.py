@@ -63,8 +63,8 @@ def test_pinned_index_out_of_range():
 
 
 def test_blow_up_stops_with_advice_and_keeps_frames(tmp_path):
-    """A damper far too strong for the step (c dt / m = 40): undamped stability holds, the
-    damped integration does not."""
+    """A damper far too strong for the step (c dt / m = 40), stepped by a solver that states no
+    stability limit (so the run cannot refuse the dt up front): the runner notices the blow-up."""
     b = ModelBuilder(gravity=(0.0, 0.0, -9.8))
     net = rectangular_net(0.1, 0.1, 0.01)
     cloth = b.add_cloth(net, wool_flannel().with_(damping=4.0e5), np.c_[net.uv, np.zeros(net.node_count)])
@@ -73,7 +73,13 @@ def test_blow_up_stops_with_advice_and_keeps_frames(tmp_path):
     pts = model.state().positions()
     pts += np.random.default_rng(1).normal(0, 1e-4, pts.shape)
     model.node_rest_points.assign(pts.astype(np.float32))
-    scene = Scene("blow-up", model, SolverExplicit(model, collision=None), dt=1e-4, duration=0.1, frame_interval=0.002)
+    explicit = SolverExplicit(model, collision=None)
+    assert explicit.critical_time_step() < 1e-4  # the damped limit would refuse this dt
+
+    class NoStatedLimit:
+        step = explicit.step
+
+    scene = Scene("blow-up", model, NoStatedLimit(), dt=1e-4, duration=0.1, frame_interval=0.002)
     with pytest.raises(SimulationUnstable, match=r"simulation became unstable .* try a smaller --dt, e.g. 5e-05"):
         run_scene(scene, tmp_path, progress=False)
     summary = json.loads((tmp_path / "summary.json").read_text())

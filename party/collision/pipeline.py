@@ -46,7 +46,7 @@ class CollisionSettings:
     max_cells: int = 256
     exclude_ring: int = 0
     broad_phase: str = "intervals"
-    crossing_guard: bool = True
+    crossing_guard: bool = False
 
     def __post_init__(self) -> None:
         if self.broad_phase not in ("intervals", "bvh"):

@@ -199,7 +199,9 @@ class ModelBuilder:
         edges = np.unique(np.sort(edges, axis=1), axis=0) if len(edges) else edges
         nbr_offsets, nbr_ids = _csr(np.concatenate([edges[:, 0], edges[:, 1]]),
                                     np.concatenate([edges[:, 1], edges[:, 0]]), n)
-        color_offsets, colored = _color_elements(elements, n)
+        limited_ids = np.flatnonzero(np.isfinite(params[:, 3])) if len(params) else np.zeros(0, np.int64)
+        color_offsets, colored = _color_elements(elements[limited_ids], n)
+        colored = limited_ids[colored].astype(np.int32)
 
         faces, rest_pts, normals, ranges, velocity, names = _merge_colliders(self._colliders)
 

@@ -31,8 +31,9 @@ class Model:
         element_stiffness: e_ik as a spring constant [N/m].
         element_damping: Viscous coefficient [kg/s] of the element's damper.
         element_max_length: (1 + L_sh) * l0 [m]; inf when the element has no plastic limit.
-        element_color_offsets, element_colored: elements grouped so that no two in a group
-            share a node (host offsets, device ids), for the plastic-limit passes.
+        element_color_offsets, element_colored: the elements with a plastic limit, grouped so
+            that no two in a group share a node (host offsets, device ids), for the
+            plastic-limit passes.
         triangle_nodes: (a, b, c) per cloth triangle, int32 shape [t, 3].
         hinge_nodes: (a, b, c, d) per bending hinge: interior edge (a, b), opposite corners c
             and d (:mod:`party.meshing.hinges`), vec4i.

@@ -41,7 +41,7 @@ def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implici
     net = rectangular_net(CLOTH_SIZE, CLOTH_SIZE, spacing)
     builder = ModelBuilder()
     builder.add_cloth(net, fabric, np.c_[net.uv - CLOTH_SIZE / 2, np.full(net.node_count, DROP_HEIGHT)], name="cloth")
-    builder.add_collider(sphere(SPHERE_RADIUS, subdivisions=5))
+    builder.add_collider(sphere(SPHERE_RADIUS, subdivisions=4))
     model = builder.finalize(device)
     collision = CollisionSettings(cloth=self_collision)
     return Scene(

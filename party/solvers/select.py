@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ..collision import CollisionSettings
 from ..errors import InvalidInput
 from ..model import Model
@@ -26,7 +28,11 @@ def check_solver(name: str) -> str:
 
 def make_solver(name: str, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
                 air: Air | None = None):
-    """The solver ``name`` (see :data:`SOLVERS`) for ``model``."""
+    """The solver ``name`` (see :data:`SOLVERS`) for ``model``: the explicit one with the
+    paper's Collision(), the implicit one with the crossing guard on as well, since its
+    longer steps let more edges slip through each other."""
     if check_solver(name) == "explicit":
         return SolverExplicit(model, collision=collision, air=air)
+    if collision is not None:
+        collision = replace(collision, crossing_guard=True)
     return SolverImplicit(model, collision=collision, air=air)

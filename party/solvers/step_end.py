@@ -42,7 +42,7 @@ class StepEnd:
         self.plastic_passes = plastic_passes
         self._over_limit = wp.zeros(1, dtype=int, device=model.device)
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
-        self._has_limit = bool((model.host["element_params"][:, 3] < 1e29).any()) if model.element_count else False
+        self._has_limit = len(model.element_colored) > 0
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
         guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
         self.guard = CrossingGuard(model) if guarded else None
@@ -76,8 +76,8 @@ class StepEnd:
         offsets = m.element_color_offsets
         for _ in range(self.plastic_passes):
             self._over_limit.zero_()
-            wp.launch(count_over_limit, dim=m.element_count,
-                      inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes, m.element_max_length,
+            wp.launch(count_over_limit, dim=len(m.element_colored),
+                      inputs=[m.element_colored, state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes, m.element_max_length,
                               dt, PLASTIC_TOLERANCE, self._over_limit], device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 return

@@ -113,6 +113,7 @@ def plastic_limit(
 
 @wp.kernel
 def count_over_limit(
+    colored: wp.array(dtype=int),
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     inv_mass: wp.array(dtype=float),
@@ -122,8 +123,9 @@ def count_over_limit(
     tolerance: float,
     count: wp.array(dtype=int),
 ):
-    """Count elements whose end-of-step length would pass (1 + tolerance) times their limit."""
-    e = wp.tid()
+    """Count the limited elements (``colored``) whose end-of-step length would pass
+    (1 + tolerance) times their limit."""
+    e = colored[wp.tid()]
     pair = elem_nodes[e]
     if inv_mass[pair[0]] + inv_mass[pair[1]] == 0.0:
         return
