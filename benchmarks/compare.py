@@ -50,6 +50,7 @@ def main() -> None:
     parser.add_argument("--systems", nargs="+", default=["party-implicit", "party-explicit", "blender", "newton"],
                         choices=["party-implicit", "party-explicit", "blender", "newton"])
     parser.add_argument("--garments", action=argparse.BooleanOptionalAction, default=True)
+    parser.add_argument("--peer-timeout", type=float, default=1200.0, help="seconds before a peer run is stopped")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
@@ -60,7 +61,7 @@ def main() -> None:
             scene = f"sphere-drop {grid}x{grid} self {self_collision}"
             for system in args.systems:
                 print(f"{scene}: {system} ...", flush=True)
-                result = run_sphere(system, grid, self_collision == "on")
+                result = run_sphere(system, grid, self_collision == "on", args.peer_timeout)
                 rows.append({"scene": scene, "system": system, **result})
                 print(f"    {describe(rows[-1])}", flush=True)
     if args.garments:
@@ -72,7 +73,7 @@ def main() -> None:
     report(rows, args.out)
 
 
-def run_sphere(system: str, grid: int, self_collision: bool) -> dict:
+def run_sphere(system: str, grid: int, self_collision: bool, timeout: float) -> dict:
     if system.startswith("party"):
         return party_sphere(system.split("-")[1], grid, self_collision)
     python = ensure_venv(system)
@@ -82,7 +83,10 @@ def run_sphere(system: str, grid: int, self_collision: bool) -> dict:
         command = [str(python), str(script)] + (["--"] if system == "blender" else [])
         command += [str(grid), "1" if self_collision else "0", str(out)]
         started = time.perf_counter()
-        done = subprocess.run(command, capture_output=True, text=True)
+        try:
+            done = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return {"error": f"{system} stopped after {timeout:.0f} s"}
         if done.returncode != 0 or not out.exists():
             tail = (done.stderr or done.stdout).strip().splitlines()[-3:]
             return {"error": f"{system} failed: {' / '.join(tail)}"}

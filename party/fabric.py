@@ -42,6 +42,14 @@ class Fabric:
         bending_rigidity: Bending rigidity B [N*m]: moment per unit width per unit curvature,
             carried by dihedral hinges on the triangles' interior edges (0: none, as in the
             paper).
+        membrane: Carry the in-plane elasticity on the triangles as a continuum membrane
+            (orthotropic St. Venant-Kirchhoff in plane stress: Young's moduli times thickness
+            ``tensile_warp`` and ``tensile_weft`` [N/m], shear modulus times thickness
+            ``shear`` [N/m], Poisson's ratio ``poisson``; the paper's section 8) instead of
+            the net's springs. The warp and weft elements then keep only their dampers and
+            the plastic limit. Implicit solver only.
+        poisson: Poisson's ratio nu_12 of the membrane: the weft contraction per unit warp
+            stretch [-]; nu_21 = nu_12 tensile_weft / tensile_warp.
         description, source: Free text; a library fabric names where its values come from.
     """
 
@@ -58,6 +66,8 @@ class Fabric:
     thickness: float = 3.0e-3
     shear: float = 0.0
     bending_rigidity: float = 0.0
+    membrane: bool = False
+    poisson: float = 0.0
     description: str = ""
     source: str = ""
 
@@ -71,6 +81,9 @@ class Fabric:
             value = getattr(self, field)
             if not (math.isfinite(value) and value >= 0.0):
                 raise InvalidInput(f"fabric {self.name!r}: {field} must be non-negative and finite, got {value}")
+        if not (0.0 <= self.poisson and self.poisson**2 * self.tensile_weft / self.tensile_warp < 1.0):
+            raise InvalidInput(f"fabric {self.name!r}: poisson must be non-negative with "
+                               f"poisson^2 tensile_weft / tensile_warp below 1, got {self.poisson}")
         if not self.strain_limit > 0.0:
             raise InvalidInput(f"fabric {self.name!r}: strain_limit must be positive, got {self.strain_limit}")
         for field in ("restitution", "momentum_propagation", "cloth_friction"):
@@ -99,6 +112,7 @@ LIBRARY = Path(__file__).parent / "data" / "fabrics.toml"
 
 _NUMBERS = {f.name for f in fields(Fabric) if f.type in ("float", float)}
 _TEXT = {"description", "source"}
+_FLAGS = {"membrane"}
 _KES = {
     "areal_density_kes": ("areal_density", units.areal_density_from_mg_per_cm2),
     "tensile_warp_kes": ("tensile_warp", units.tensile_stiffness_from_kes),
@@ -118,8 +132,13 @@ def fabric_from_mapping(name: str, values: dict, *, origin: str = "fabric") -> F
         if key in _TEXT:
             given[key] = str(value)
             continue
+        if key in _FLAGS:
+            if not isinstance(value, bool):
+                raise InvalidInput(f"{origin}: fabric {name!r}: {key} must be true or false, got {value!r}")
+            given[key] = value
+            continue
         if key not in _NUMBERS and key not in _KES:
-            known = ", ".join(sorted(_NUMBERS | set(_KES) | _TEXT - {"name"}))
+            known = ", ".join(sorted(_NUMBERS | set(_KES) | _TEXT | _FLAGS - {"name"}))
             raise InvalidInput(f"{origin}: fabric {name!r} has unknown key {key!r} (known: {known})")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise InvalidInput(f"{origin}: fabric {name!r}: {key} must be a number, got {value!r}")

@@ -81,3 +81,51 @@ def test_shear_diagonals_give_the_fabrics_shear_stiffness():
     model = b.finalize("cpu")
     energy = total_energy(model, model.host["points"])
     assert energy == pytest.approx(0.5 * fabric.shear * gamma**2 * 0.02, rel=0.02)
+
+
+@pytest.mark.parametrize("poisson", [0.0, 0.3])
+def test_membrane_strip_stretches_and_narrows_as_st_venant_kirchhoff_says(poisson):
+    """A 1 m strip of a soft membrane fabric hanging from its top edge, relaxed with the
+    implicit solver. Uniaxial St. Venant-Kirchhoff: at arc length s the stress resultant
+    rho g (L - s) = (1 + e) E (e + e^2 / 2), so the strip lengthens by the integral of e; and
+    the lateral Green strain is -nu E11, so at a quarter of the way down the width is
+    w sqrt(1 - 2 nu E11)."""
+    from scipy.optimize import brentq
+
+    from party.solvers.relax import SolverRelax
+
+    fabric = library()["knit_jersey"].with_(membrane=True, poisson=poisson, tensile_weft=24.9, shear=10.0,
+                                            strain_limit=float("inf"), bending_rigidity=0.0)
+    net = rectangular_net(1.0, 0.1, 0.02)  # warp vertical
+    b = ModelBuilder()
+    cloth = b.add_cloth(net, fabric, np.c_[np.zeros(net.node_count), net.uv[:, 1], -net.uv[:, 0]])
+    b.pin(cloth.nodes(np.flatnonzero(net.uv[:, 0] == 0.0)))
+    model = b.finalize("cpu")
+    state = model.state()
+    result = SolverRelax(model, collision=None, momentum=0.9, solver="implicit").relax(
+        state, 1.0 / 300.0, max_iterations=4000, min_iterations=300, tolerance=1e-7)
+    assert result.converged
+    p = state.positions()
+    load = fabric.areal_density * 9.80665 / fabric.tensile_warp
+
+    def strain(s):
+        return brentq(lambda e: (1 + e) * (e + e * e / 2) - load * (1.0 - s), 0.0, 1.0) if s < 1.0 else 0.0
+
+    s = np.linspace(0.0, 1.0, 2001)
+    expected = np.trapezoid([strain(x) for x in s], s)
+    assert -p[:, 2].min() - 1.0 == pytest.approx(expected, rel=0.03)
+    quarter = np.isclose(net.uv[:, 0], 0.24)
+    width = p[quarter, 1].max() - p[quarter, 1].min()
+    e11 = strain(0.24) + strain(0.24) ** 2 / 2
+    assert width == pytest.approx(0.1 * np.sqrt(1 - 2 * poisson * e11), rel=0.005)
+
+
+def test_explicit_solver_refuses_a_membrane():
+    from party.errors import InvalidInput
+    from party.solvers import SolverExplicit
+
+    net = rectangular_net(0.1, 0.1, 0.02)
+    b = ModelBuilder()
+    b.add_cloth(net, library()["cotton"].with_(membrane=True), np.c_[net.uv, np.zeros(net.node_count)])
+    with pytest.raises(InvalidInput, match="^the continuum membrane .* implicit solver only; use --solver implicit$"):
+        SolverExplicit(b.finalize("cpu"))

@@ -50,6 +50,7 @@ class ModelBuilder:
         self._element_params: list[np.ndarray] = []  # rest, stiffness, damping, max length
         self._triangles: list[np.ndarray] = []
         self._hinges: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # nodes, weights, stiffness
+        self._membranes: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # inverse rest, area, C
         self._kinematic: set[int] = set()
         self._colliders: list[ColliderMesh] = []
         self.cloths: list[ClothRange] = []
@@ -115,6 +116,9 @@ class ModelBuilder:
         in_plane = np.isin(net.kinds, [ElementKind.WARP, ElementKind.WEFT])
         modulus = np.where(in_plane, share * fabric.tensile_warp + (1.0 - share) * fabric.tensile_weft, modulus)
         keep = modulus > 0.0
+        if fabric.membrane:  # the triangles carry the elasticity; warp and weft keep damper and limit
+            modulus = np.zeros_like(modulus)
+            keep = in_plane
         limited = np.isin(net.kinds, [ElementKind.WARP, ElementKind.WEFT])
         self._push_elements(
             net.elements[keep] + node_start,
@@ -125,6 +129,7 @@ class ModelBuilder:
         )
         self._triangles.append(net.triangles + node_start)
         self._triangle_count += len(net.triangles)
+        self._membranes.append(_membrane(net, fabric))
         if fabric.bending_rigidity > 0.0:
             nodes, weights, scale = hinges(net)
             self._hinges.append((nodes + node_start, weights, fabric.bending_rigidity * scale))
@@ -162,8 +167,8 @@ class ModelBuilder:
         return np.arange(start, self._node_count)
 
     def _push_elements(self, pairs, rest, stiffness, damping, strain_limit) -> None:
-        if np.any(~np.isfinite(stiffness) | (stiffness <= 0)):
-            raise InvalidInput("element stiffness must be positive and finite")
+        if np.any(~np.isfinite(stiffness) | (stiffness < 0)):
+            raise InvalidInput("element stiffness must be non-negative and finite")
         if np.any(~np.isfinite(damping) | (damping < 0)):
             raise InvalidInput("element damping must be non-negative and finite")
         if np.any(~np.isfinite(rest) | (rest <= 0)):
@@ -188,6 +193,9 @@ class ModelBuilder:
         hinge_nodes = np.concatenate([h[0] for h in self._hinges]) if self._hinges else np.zeros((0, 4), np.int32)
         hinge_weights = np.concatenate([h[1] for h in self._hinges]) if self._hinges else np.zeros((0, 4))
         hinge_stiffness = np.concatenate([h[2] for h in self._hinges]) if self._hinges else np.zeros(0)
+        inv_rest = np.concatenate([m[0] for m in self._membranes]) if self._membranes else np.zeros((0, 2, 2))
+        membrane_area = np.concatenate([m[1] for m in self._membranes]) if self._membranes else np.zeros(0)
+        membrane_c = np.concatenate([m[2] for m in self._membranes]) if self._membranes else np.zeros((0, 3, 3))
         kinematic = np.zeros(self._node_count, bool)
         kinematic[list(self._kinematic)] = True
         inv_mass = np.where(kinematic, 0.0, 1.0 / mass)
@@ -236,6 +244,10 @@ class ModelBuilder:
             element_color_offsets=tuple(int(c) for c in color_offsets),
             element_colored=arr(colored, wp.int32),
             triangle_nodes=arr(triangles.astype(np.int32), wp.int32),
+            membrane_count=int((membrane_area > 0).sum()),
+            triangle_inv_rest=arr(inv_rest.astype(np.float32), wp.mat22),
+            triangle_membrane_area=arr(membrane_area.astype(np.float32), wp.float32),
+            triangle_membrane_c=arr(membrane_c.astype(np.float32), wp.mat33),
             hinge_count=len(hinge_nodes),
             hinge_nodes=arr(hinge_nodes.astype(np.int32), wp.vec4i),
             hinge_weights=arr(hinge_weights.astype(np.float32), wp.vec4),
@@ -250,10 +262,29 @@ class ModelBuilder:
             host={
                 "points": points, "mass": mass, "elements": elements, "element_params": params,
                 "triangles": triangles, "kinematic": kinematic, "hinge_nodes": hinge_nodes,
-                "hinge_weights": hinge_weights, "hinge_stiffness": hinge_stiffness, "cloths": tuple(self.cloths),
+                "hinge_weights": hinge_weights, "hinge_stiffness": hinge_stiffness,
+                "membrane_area": membrane_area, "cloths": tuple(self.cloths),
                 "colliders": tuple(self._colliders),
             },
         )
+
+
+def _membrane(net: ClothNet, fabric: Fabric) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per triangle: the inverse of its rest edge matrix [e1 e2] in the warp-aligned pattern
+    plane [1/m], its rest area [m^2] (0 when the fabric has no membrane) and the plane-stress
+    stiffness C [N/m] taking the Green strain (E11, E22, 2 E12) to the stress resultants."""
+    corners = net.rest_triangle_uv()
+    edges = np.stack([corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]], axis=2)  # columns
+    det = edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0]
+    inverse = np.zeros_like(edges)
+    ok = np.abs(det) > 1e-20
+    inverse[ok] = np.linalg.inv(edges[ok])
+    area = 0.5 * np.abs(det) if fabric.membrane else np.zeros(len(det))
+    e1, e2, g, nu12 = fabric.tensile_warp, fabric.tensile_weft, fabric.shear, fabric.poisson
+    nu21 = nu12 * e2 / e1
+    scale = 1.0 / (1.0 - nu12 * nu21)
+    c = np.array([[e1 * scale, nu21 * e1 * scale, 0.0], [nu12 * e2 * scale, e2 * scale, 0.0], [0.0, 0.0, g]])
+    return inverse, area, np.broadcast_to(c, (len(det), 3, 3)).copy()
 
 
 def _csr(rows: np.ndarray, values: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -35,6 +35,12 @@ class Model:
             that no two in a group share a node (host offsets, device ids), for the
             plastic-limit passes.
         triangle_nodes: (a, b, c) per cloth triangle, int32 shape [t, 3].
+        membrane_count: Triangles that carry a continuum membrane (``Fabric.membrane``).
+        triangle_inv_rest: Inverse of each triangle's rest edge matrix [e1 e2] in the
+            warp-aligned pattern plane [1/m], mat22.
+        triangle_membrane_area: Rest area [m^2] of each membrane triangle, 0 for the others.
+        triangle_membrane_c: Plane-stress stiffness [N/m] of each triangle, (E11, E22, 2 E12)
+            to stress resultants, mat33.
         hinge_nodes: (a, b, c, d) per bending hinge: interior edge (a, b), opposite corners c
             and d (:mod:`party.meshing.hinges`), vec4i.
         hinge_weights: Cotangent weights K of each hinge's curvature vector sum_i K_i x_i, vec4.
@@ -72,6 +78,10 @@ class Model:
     element_color_offsets: tuple[int, ...]
     element_colored: wp.array
     triangle_nodes: wp.array
+    membrane_count: int
+    triangle_inv_rest: wp.array
+    triangle_membrane_area: wp.array
+    triangle_membrane_c: wp.array
     hinge_count: int
     hinge_nodes: wp.array
     hinge_weights: wp.array

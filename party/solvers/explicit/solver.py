@@ -37,6 +37,9 @@ class SolverExplicit:
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
                  air: Air | None = None, plastic_passes: int = 32,
                  kinetic_damping: tuple[float, float] | None = None) -> None:
+        if model.membrane_count:
+            raise InvalidInput("the continuum membrane (a fabric with membrane = true) is integrated by the implicit "
+                               "solver only; use --solver implicit")
         self.model = model
         self.kinetic_damping = kinetic_damping
         self.end = StepEnd(model, collision, plastic_passes)

@@ -26,6 +26,60 @@ def inertial_target(
     x_iter[i] = y[i]
 
 
+@wp.struct
+class MembraneTerms:
+    force: wp.vec3
+    hessian: wp.mat33
+
+
+@wp.func
+def membrane_gradient(x: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2), d: wp.mat22, c: wp.mat33,
+                      t: int, corner: int) -> MembraneTerms:
+    """Per unit rest area, the gradient of a triangle's St. Venant-Kirchhoff membrane energy
+    (E : C : E / 2, E the Green strain in the warp-aligned rest frame) with respect to one
+    corner, and its Gauss-Newton Hessian block (positive semi-definite; the stress term only
+    where the stress along that corner's shape gradient is tensile)."""
+    x0 = x[tris[t, 0]]
+    e1 = x[tris[t, 1]] - x0
+    e2 = x[tris[t, 2]] - x0
+    # F = [e1 e2] D, columns f0 (warp) and f1 (weft)
+    f0 = e1 * d[0, 0] + e2 * d[1, 0]
+    f1 = e1 * d[0, 1] + e2 * d[1, 1]
+    strain = wp.vec3(0.5 * (wp.dot(f0, f0) - 1.0), 0.5 * (wp.dot(f1, f1) - 1.0), wp.dot(f0, f1))
+    stress = c * strain  # S11, S22, S12
+    # shape gradient of the corner: dF/dx_corner = I (x) g
+    g = wp.vec2(-(d[0, 0] + d[1, 0]), -(d[0, 1] + d[1, 1]))
+    if corner == 1:
+        g = wp.vec2(d[0, 0], d[0, 1])
+    elif corner == 2:
+        g = wp.vec2(d[1, 0], d[1, 1])
+    sg0 = stress[0] * g[0] + stress[2] * g[1]
+    sg1 = stress[2] * g[0] + stress[1] * g[1]
+    terms = MembraneTerms()
+    terms.force = f0 * sg0 + f1 * sg1  # P g with P = F S
+    # strain change (dE11, dE22, 2 dE12) per corner displacement: rows of J = M F^T
+    r0 = g[0] * f0
+    r1 = g[1] * f1
+    r2 = g[1] * f0 + g[0] * f1
+    h = wp.mat33(0.0)
+    for a in range(3):
+        ra = r0
+        if a == 1:
+            ra = r1
+        elif a == 2:
+            ra = r2
+        for b in range(3):
+            rb = r0
+            if b == 1:
+                rb = r1
+            elif b == 2:
+                rb = r2
+            h += c[a, b] * wp.outer(ra, rb)
+    geometric = wp.max(g[0] * sg0 + g[1] * sg1, 0.0)
+    terms.hessian = h + geometric * wp.identity(n=3, dtype=float)
+    return terms
+
+
 @wp.kernel
 def block_descent(
     colored: wp.array(dtype=int),
@@ -40,6 +94,12 @@ def block_descent(
     bend_offsets: wp.array(dtype=int),
     bend_nodes: wp.array(dtype=int),
     bend_values: wp.array(dtype=float),
+    tri_offsets: wp.array(dtype=int),
+    tri_slots: wp.array(dtype=int),
+    tris: wp.array(dtype=int, ndim=2),
+    inv_rest: wp.array(dtype=wp.mat22),
+    membrane_area: wp.array(dtype=float),
+    membrane_c: wp.array(dtype=wp.mat33),
     dt: float,
     x: wp.array(dtype=wp.vec3),
 ):
@@ -54,7 +114,8 @@ def block_descent(
     c (v_k - v_i) with v = (x - x(t)) / dt contribute c / dt I. The hinges' energy is the
     quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h K_h K_h^T
     (``bend_*``: row i of L, its diagonal included), so they add (L x)_i to the gradient and
-    L_ii I to the Hessian.
+    L_ii I to the Hessian. Membrane triangles add their St. Venant-Kirchhoff terms
+    (:func:`membrane_gradient`).
     """
     i = colored[offset + wp.tid()]
     if inv_mass[i] == 0.0:
@@ -86,6 +147,14 @@ def block_descent(
         grad += bend_values[j] * x[k]
         if k == i:
             diagonal += bend_values[j]
+    for j in range(tri_offsets[i], tri_offsets[i + 1]):
+        slot = tri_slots[j]
+        t = slot // 3
+        area = membrane_area[t]
+        if area > 0.0:
+            g = membrane_gradient(x, tris, inv_rest[t], membrane_c[t], t, slot - 3 * t)
+            grad += area * g.force
+            hess += area * g.hessian
     hess += diagonal * wp.identity(n=3, dtype=float)
     det = wp.determinant(hess)
     if det > 1.0e-20:

@@ -71,6 +71,9 @@ class SolverImplicit:
         self._bend_offsets = wp.array(bend.indptr.astype(np.int32), dtype=int, device=dev)
         self._bend_nodes = wp.array(bend.indices.astype(np.int32), dtype=int, device=dev)
         self._bend_values = wp.array(bend.data.astype(np.float32), dtype=float, device=dev)
+        tri_offsets, tri_slots = node_triangles(model)
+        self._tri_offsets = wp.array(tri_offsets, dtype=int, device=dev)
+        self._tri_slots = wp.array(tri_slots, dtype=int, device=dev)
         color_offsets, colored = color_nodes(model)
         self.color_offsets = color_offsets
         self._colored = wp.array(colored, dtype=int, device=dev)
@@ -121,7 +124,9 @@ class SolverImplicit:
                 wp.launch(block_descent, dim=offsets[c + 1] - offsets[c],
                           inputs=[self._colored, offsets[c], state_in.node_q, self._y, m.node_mass, m.node_inv_mass,
                                   self._spring_offsets, self._spring_other, self._spring_params, self._bend_offsets, self._bend_nodes,
-                                  self._bend_values, dt], outputs=[self._x],
+                                  self._bend_values, self._tri_offsets, self._tri_slots, m.triangle_nodes,
+                                  m.triangle_inv_rest, m.triangle_membrane_area, m.triangle_membrane_c, dt],
+                          outputs=[self._x],
                           device=dev)
             if self.chebyshev > 0.0:
                 if iteration == 0:
@@ -150,6 +155,19 @@ def node_springs(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.cumsum(offsets).astype(np.int32), other[order].astype(np.int32), values[order]
 
 
+def node_triangles(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """CSR of the membrane triangles at each node; entries are triangle * 3 + the node's corner
+    (empty rows where no triangle carries a membrane)."""
+    tri = model.host["triangles"].astype(np.int64)
+    membrane = model.host["membrane_area"] > 0.0
+    slots = np.arange(tri.size, dtype=np.int64).reshape(-1, 3)[membrane].ravel()
+    rows = tri[membrane].ravel()
+    order = np.argsort(rows, kind="stable")
+    offsets = np.zeros(model.node_count + 1, np.int64)
+    np.add.at(offsets, rows + 1, 1)
+    return np.cumsum(offsets).astype(np.int32), slots[order].astype(np.int32)
+
+
 def bending_matrix(model: Model):
     """L = sum_h stiffness_h K_h K_h^T [N/m], the constant matrix of the hinges' quadratic
     energy x^T L x / 2 (per coordinate), as a scipy CSR matrix with sorted rows."""
@@ -168,7 +186,8 @@ def bending_matrix(model: Model):
 
 
 def color_nodes(model: Model) -> tuple[list[int], np.ndarray]:
-    """Greedy colouring of the nodes so that no two of one colour share an element or a hinge
+    """Greedy colouring of the nodes so that no two of one colour share an element, a membrane
+    triangle or a hinge
     (VBD's parallel Gauss-Seidel). Returns colour offsets (host) and node ids sorted by colour;
     kinematic nodes are left out."""
     import scipy.sparse as sp
@@ -176,6 +195,8 @@ def color_nodes(model: Model) -> tuple[list[int], np.ndarray]:
     h = model.host
     n = model.node_count
     pairs = [h["elements"].astype(np.int64)]
+    membrane = h["triangles"][h["membrane_area"] > 0.0].astype(np.int64)
+    pairs += [membrane[:, [0, 1]], membrane[:, [1, 2]], membrane[:, [2, 0]]]
     hinge = h["hinge_nodes"].astype(np.int64)
     for a in range(4):
         for b in range(a + 1, 4):
