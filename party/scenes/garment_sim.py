@@ -78,13 +78,13 @@ def garment_model(net: ClothNet, fabric: Fabric, points: np.ndarray, body: Body,
 
 
 def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = None, max_iterations: int = 6000,
-        progress: bool = False, solver: str = "explicit") -> Sewn:
+        progress: bool = False) -> Sewn:
     """Place ``garment`` around ``body``, sew it closed and return the sewn garment.
 
     Two relaxations: the panels pulled together by sewing springs (plastic limit off, so that
     seams can close before the cloth has slid into place), then the joined garment with its
-    plastic limit on, so that the dynamics start from a net within its limits. ``solver``
-    names the stepper of both (see :class:`~party.solvers.relax.SolverRelax`)."""
+    plastic limit on, so that the dynamics start from a net within its limits. Both relax
+    with the paper's explicit steps."""
     start = dress(garment, body, device=device or "cpu")
     builder = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     builder.add_cloth(garment.net, fabric.with_(friction=0.0, strain_limit=float("inf")), start, name="panels")
@@ -96,12 +96,11 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     for collider in body.colliders:
         builder.add_collider(collider)
     model = builder.finalize(device)
-    dt = relax_time_step(model, solver)
+    dt = relax_time_step(model, "explicit")
     state = model.state()
     with relax_progress("sewing", max_iterations, progress) as on_log:
-        result = SolverRelax(model, collision=CollisionSettings(exclude_ring=1), max_speed=4.0, momentum=MOMENTUM,
-                             solver=solver).relax(state, dt, max_iterations=max_iterations,
-                                                  min_iterations=min(400, max_iterations), on_log=on_log)
+        result = SolverRelax(model, collision=CollisionSettings(exclude_ring=1), max_speed=4.0, momentum=MOMENTUM).relax(
+            state, dt, max_iterations=max_iterations, min_iterations=min(400, max_iterations), on_log=on_log)
     points = _finite(state.positions())
     sp = garment.seam_pairs
     pair_gap = np.linalg.norm(points[sp[:, 0]] - points[sp[:, 1]], axis=1)
@@ -115,8 +114,8 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     state = joined.state()
     settle = max(max_iterations // 4, 200)
     with relax_progress("settling seams", settle, progress) as on_log:
-        tail = SolverRelax(joined, max_speed=1.0, solver=solver).relax(
-            state, relax_time_step(joined, solver), max_iterations=settle, min_iterations=min(100, settle),
+        tail = SolverRelax(joined, max_speed=1.0).relax(
+            state, relax_time_step(joined, "explicit"), max_iterations=settle, min_iterations=min(100, settle),
             on_log=on_log)
     return Sewn(garment, net, node_map, _finite(state.positions()), seam_gaps, result, tail, dt)
 
