@@ -17,11 +17,12 @@ from .kernels import block_descent, chebyshev_blend, inertial_target, step_veloc
 
 
 class SolverImplicit:
-    """Implicit (backward) Euler on the paper's net plus shear diagonals and bending hinges,
-    solved by Vertex Block Descent (VBD, Chen et al. 2024): each iteration visits the nodes
-    colour by colour and moves each to the minimum of its local incremental potential (one
-    3x3 Newton step). Steps of 1/60 s with a few substeps stay stable for any stiffness, at the
-    cost of the stiffest modes being damped.
+    """Implicit (backward) Euler on the paper's net plus shear diagonals, bending hinges and
+    the optional continuum membrane, solved by Vertex Block Descent (VBD, Chen et al. 2024):
+    each iteration visits the nodes colour by colour and moves each to the minimum of its local
+    incremental potential (one 3x3 Newton step). Steps of 1/60 s in a few substeps stay stable
+    for every library fabric (tested), at the cost of the stiffest modes being damped and, for
+    stiff fabrics at few sweeps, an approximate solve (see docs/design.md).
 
     The step ends as the explicit one does (:class:`party.solvers.step_end.StepEnd`): the
     velocity the solve proposes, v* = (x - x(t)) / dt, goes through the plastic limit and the
@@ -33,8 +34,9 @@ class SolverImplicit:
 
     Args:
         model: The model to advance.
-        iterations: VBD sweeps per step.
-        chebyshev: Estimated spectral radius rho of the sweeps for Chebyshev acceleration (0: none).
+        iterations: VBD sweeps per step (fixed once the first step has been recorded).
+        chebyshev: Estimated spectral radius rho of the sweeps for Chebyshev acceleration (0:
+            none; fixed like ``iterations``).
         collision: Collision settings; ``None`` switches collision off.
         air: Wind and air drag; ``None`` for none.
         plastic_passes: See :class:`~party.solvers.step_end.StepEnd`.
@@ -42,8 +44,8 @@ class SolverImplicit:
             (:mod:`party.solvers.relax`); None for dynamics.
     """
 
-    def __init__(self, model: Model, *, iterations: int = 10, chebyshev: float = 0.9, collision: CollisionSettings | None = CollisionSettings(),
-                 air: Air | None = None, plastic_passes: int = 32,
+    def __init__(self, model: Model, *, iterations: int = 10, chebyshev: float = 0.9,
+                 collision: CollisionSettings | None = CollisionSettings(), air: Air | None = None, plastic_passes: int = 32,
                  kinetic_damping: tuple[float, float] | None = None) -> None:
         if iterations < 1:
             raise InvalidInput(f"implicit solver needs at least 1 iteration, got {iterations}")
