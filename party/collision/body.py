@@ -3,7 +3,7 @@ response of eqs. (8)-(12)."""
 
 import warp as wp
 
-from .geometry import boxes_overlap, closest_point_barycentric, friction_restitution_response, interpolate
+from .geometry import boxes_overlap, closest_point_barycentric, friction_restitution_response, interpolate, step_box
 from .intervals import IntervalLists, first_visit, query_axis
 
 EDGE_TOLERANCE = 0.25
@@ -35,10 +35,7 @@ def gather_body_faces(
     if inv_mass[i] == 0.0:
         return
     x0 = x[i]
-    x1 = x0 + v[i] * dt
-    pad = wp.vec3(thickness[i] + margin)
-    lo = wp.min(x0, x1) - pad
-    hi = wp.max(x0, x1) + pad
+    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
     sel = query_axis(lists, lo, hi)
     axis = sel[0]
     base = axis * (lists.max_cells + 1)
@@ -78,9 +75,8 @@ def gather_body_faces_bvh(
     if inv_mass[i] == 0.0:
         return
     x0 = x[i]
-    x1 = x0 + v[i] * dt
-    pad = wp.vec3(thickness[i] + margin)
-    query = wp.bvh_query_aabb(bvh, wp.min(x0, x1) - pad, wp.max(x0, x1) + pad)
+    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
+    query = wp.bvh_query_aabb(bvh, lo, hi)
     f = int(0)
     count = int(0)
     while wp.bvh_query_next(query, f):

@@ -4,7 +4,7 @@ barycentric weights."""
 
 import warp as wp
 
-from .geometry import boxes_overlap, closest_point_barycentric, interpolate
+from .geometry import boxes_overlap, closest_point_barycentric, interpolate, step_box
 from .intervals import IntervalLists, first_visit, query_axis
 
 MAX_CONTACTS = 4
@@ -81,9 +81,8 @@ def gather_cloth_triangles_bvh(
     interval lists: the same box, the same triangles kept."""
     i = wp.tid()
     x0 = x[i]
-    x1 = x0 + v[i] * dt
-    pad = wp.vec3(thickness[i] + margin)
-    query = wp.bvh_query_aabb(bvh, wp.min(x0, x1) - pad, wp.max(x0, x1) + pad)
+    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
+    query = wp.bvh_query_aabb(bvh, lo, hi)
     t = int(0)
     count = int(0)
     while wp.bvh_query_next(query, t):
@@ -115,10 +114,7 @@ def gather_cloth_triangles(
     farther ones dropped goes to ``overflow``)."""
     i = wp.tid()
     x0 = x[i]
-    x1 = x0 + v[i] * dt
-    pad = wp.vec3(thickness[i] + margin)
-    lo = wp.min(x0, x1) - pad
-    hi = wp.max(x0, x1) + pad
+    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
     sel = query_axis(lists, lo, hi)
     axis = sel[0]
     base = axis * (lists.max_cells + 1)

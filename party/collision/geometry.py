@@ -48,6 +48,14 @@ def interpolate(w: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> wp.vec3:
 
 
 @wp.func
+def step_box(x0: wp.vec3, step: wp.vec3, pad: float):
+    """The box spanned by a node's step from ``x0`` to ``x0 + step``, grown by ``pad`` [m]
+    (section 6.1's search box): returns (lower, upper)."""
+    x1 = x0 + step
+    return wp.min(x0, x1) - wp.vec3(pad), wp.max(x0, x1) + wp.vec3(pad)
+
+
+@wp.func
 def boxes_overlap(lo0: wp.vec3, hi0: wp.vec3, lo1: wp.vec3, hi1: wp.vec3) -> bool:
     return (lo0[0] <= hi1[0] and lo1[0] <= hi0[0] and lo0[1] <= hi1[1] and lo1[1] <= hi0[1]
             and lo0[2] <= hi1[2] and lo1[2] <= hi0[2])
