@@ -16,7 +16,8 @@ import numpy as np
 import warp as wp
 
 from ..model import Model
-from .geometry import segment_hits_triangle
+from ..meshing.net import triangle_edges
+from .geometry import edge_pierces_triangle
 
 MAX_ROUNDS = 16
 """Rounds of check-and-revert per step; a round reverts every pair found, so a step needs
@@ -33,25 +34,18 @@ def _check_edges(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.arra
     crossed_now[e] = 0
     if near[i] == 0 and near[k] == 0 and crossed_before[e] == 0:
         return
-    p = points[i]
-    q = points[k]
-    query = wp.mesh_query_aabb(mesh, wp.min(p, q), wp.max(p, q))
+    query = wp.mesh_query_aabb(mesh, wp.min(points[i], points[k]), wp.max(points[i], points[k]))
     t = int(0)
     while wp.mesh_query_aabb_next(query, t):
-        a = tris[t, 0]
-        b = tris[t, 1]
-        c = tris[t, 2]
-        if a == i or a == k or b == i or b == k or c == i or c == k:
-            continue
-        if segment_hits_triangle(p, q, points[a], points[b], points[c]):
+        if edge_pierces_triangle(i, k, t, points, tris):
             crossed_now[e] = 1
             if crossed_before[e] == 0:
                 wp.atomic_add(new_count, 0, 1)
                 revert[i] = 1
                 revert[k] = 1
-                revert[a] = 1
-                revert[b] = 1
-                revert[c] = 1
+                revert[tris[t, 0]] = 1
+                revert[tris[t, 1]] = 1
+                revert[tris[t, 2]] = 1
 
 
 @wp.kernel
@@ -72,7 +66,7 @@ class CrossingGuard:
         self.model = model
         dev = model.device
         tri = model.triangles
-        edges = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+        edges = triangle_edges(tri)
         self.edge_count = len(edges)
         self.edges = wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=dev)
         self.points = wp.clone(model.node_rest_points)

@@ -91,6 +91,13 @@ class ClothNet:
         return out
 
 
+def triangle_edges(triangles: np.ndarray) -> np.ndarray:
+    """The distinct edges of a triangle list, each as (smaller, larger) node index, sorted."""
+    triangles = np.asarray(triangles)
+    sides = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    return np.unique(np.sort(sides, axis=1), axis=0)
+
+
 def rectangular_net(width: float, height: float, spacing: float) -> ClothNet:
     """A rectangle of cloth, ``width`` along the warp (u) by ``height`` along the weft (v) [m].
 

@@ -8,7 +8,8 @@ import warp as wp
 
 from ..body.collider import ColliderMesh
 from ..body.probe import ColliderProbe
-from ..collision.geometry import segment_hits_triangle
+from ..collision.geometry import edge_pierces_triangle
+from ..meshing.net import triangle_edges
 
 
 def collider_inside_and_distance(points: np.ndarray, collider: ColliderMesh, device: str = "cpu",
@@ -28,19 +29,10 @@ def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.a
     e = wp.tid()
     i = edges[e][0]
     k = edges[e][1]
-    p = points[i]
-    q = points[k]
-    lo = wp.min(p, q)
-    hi = wp.max(p, q)
-    query = wp.mesh_query_aabb(mesh, lo, hi)
+    query = wp.mesh_query_aabb(mesh, wp.min(points[i], points[k]), wp.max(points[i], points[k]))
     t = int(0)
     while wp.mesh_query_aabb_next(query, t):
-        a = tris[t, 0]
-        b = tris[t, 1]
-        c = tris[t, 2]
-        if a == i or a == k or b == i or b == k or c == i or c == k:
-            continue
-        if segment_hits_triangle(p, q, points[a], points[b], points[c]):
+        if edge_pierces_triangle(i, k, t, points, tris):
             wp.atomic_add(count, 0, 1)
             crossed[e] = 1
 
@@ -55,7 +47,7 @@ def crossing_edges(points: np.ndarray, triangles: np.ndarray, device: str = "cpu
     """The crossing count of :func:`cloth_crossings` and the node pairs of the crossing edges."""
     if len(triangles) == 0:
         return 0, np.zeros((0, 2), int)
-    edges = np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1), axis=0)
+    edges = triangle_edges(triangles)
     pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=device)
     mesh = wp.Mesh(points=pts, indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
     count = wp.zeros(1, dtype=int, device=device)
