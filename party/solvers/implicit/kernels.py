@@ -57,26 +57,10 @@ def membrane_gradient(x: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim
     sg1 = stress[2] * g[0] + stress[1] * g[1]
     terms = MembraneTerms()
     terms.force = f0 * sg0 + f1 * sg1  # P g with P = F S
-    # strain change (dE11, dE22, 2 dE12) per corner displacement: rows of J = M F^T
-    r0 = g[0] * f0
-    r1 = g[1] * f1
-    r2 = g[1] * f0 + g[0] * f1
-    h = wp.mat33(0.0)
-    for a in range(3):
-        ra = r0
-        if a == 1:
-            ra = r1
-        elif a == 2:
-            ra = r2
-        for b in range(3):
-            rb = r0
-            if b == 1:
-                rb = r1
-            elif b == 2:
-                rb = r2
-            h += c[a, b] * wp.outer(ra, rb)
+    # J: strain change (dE11, dE22, 2 dE12) per corner displacement, J = M F^T
+    j = wp.matrix_from_rows(g[0] * f0, g[1] * f1, g[1] * f0 + g[0] * f1)
     geometric = wp.max(g[0] * sg0 + g[1] * sg1, 0.0)
-    terms.hessian = h + geometric * wp.identity(n=3, dtype=float)
+    terms.hessian = wp.transpose(j) * c * j + geometric * wp.identity(n=3, dtype=float)
     return terms
 
 
