@@ -41,13 +41,9 @@ def hinges(net: ClothNet) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     key = np.sort(sides, axis=1)
     order = np.lexsort((key[:, 1], key[:, 0]))
     key, sides, owner, slot = key[order], sides[order], owner[order], slot[order]
-    same_next = np.all(key[1:] == key[:-1], axis=1)
-    starts = np.flatnonzero(same_next)
-    # exactly two triangles: the pair (s, s+1) with no third one before or after
-    ok = np.ones(len(starts), bool)
-    ok &= np.r_[True, ~same_next[:-1]][starts] if len(starts) else ok
-    ok &= np.r_[~same_next[1:], True][starts] if len(starts) else ok
-    first, second = starts[ok], starts[ok] + 1
+    _, starts, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+    first = starts[counts == 2]  # edges of exactly two triangles, listed at first and first + 1
+    second = first + 1
     t0, t1 = owner[first], owner[second]
     s0, s1 = slot[first], slot[second]
     a, b = sides[first, 0], sides[first, 1]
