@@ -68,7 +68,6 @@ class CollisionPipeline:
         self.margin = float(settings.search_margin)
         self.bvh = settings.broad_phase == "bvh"
         self.contacts = wp.zeros(n, dtype=int, device=dev)
-        """1 for each node that touched a body in the last :meth:`apply`."""
         self.searches = 0
         self._flag = wp.ones(1, dtype=int, device=dev)
         self._overflow = wp.zeros(1, dtype=int, device=dev)
@@ -110,7 +109,6 @@ class CollisionPipeline:
         candidates (a second pass within one step)."""
         m = self.model
         dev = m.device
-        self.contacts.zero_()
         if search and (self.has_body or self.has_cloth):
             wp.launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag], device=dev)
             if self.body_moving or int(self._flag.numpy()[0]):
@@ -132,8 +130,7 @@ class CollisionPipeline:
                 break
 
     def body_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
-        """One cloth-body response pass (eqs. 8-12) over the candidates of the last search;
-        nodes in contact are flagged in ``contacts``."""
+        """One cloth-body response pass (eqs. 8-12) over the candidates of the last search."""
         if not self.has_body:
             return
         m = self.model
