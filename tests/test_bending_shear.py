@@ -9,7 +9,6 @@ from party.meshing import rectangular_net
 from party.meshing.hinges import bending_energy, hinges
 from party.model import ModelBuilder
 from party.solvers.explicit.kernels import hinge_forces
-from party.solvers.implicit.solver import bending_matrix
 from party.solvers.relax import total_energy
 
 B = 1.0e-5  # N*m
@@ -67,7 +66,7 @@ def test_hinge_forces_are_minus_the_energy_gradient(rng):
             minus[i, c] -= step
             gradient[i, c] = (energy(plus) - energy(minus)) / (2 * step)
     assert np.allclose(forces.numpy(), -gradient, atol=1e-6 * np.abs(gradient).max())
-    L = bending_matrix(model)
+    L = model.bending_matrix()
     assert 0.5 * np.sum(points * (L @ points)) == pytest.approx(energy(points), rel=1e-5)
 
 

@@ -114,7 +114,8 @@ class ModelBuilder:
         modulus = np.array([tensile[ElementKind(k)] for k in range(len(ElementKind))])[net.kinds]
         share = net.element_warp_share()
         in_plane = np.isin(net.kinds, [ElementKind.WARP, ElementKind.WEFT])
-        modulus = np.where(in_plane, share * fabric.tensile_warp + (1.0 - share) * fabric.tensile_weft, modulus)
+        warp, weft = net_tensile_moduli(fabric, diagonals=bool(np.any(net.kinds == ElementKind.SHEAR)))
+        modulus = np.where(in_plane, share * warp + (1.0 - share) * weft, modulus)
         keep = modulus > 0.0
         if fabric.membrane:  # the triangles carry the elasticity; warp and weft keep damper and limit
             modulus = np.zeros_like(modulus)
@@ -267,6 +268,31 @@ class ModelBuilder:
                 "colliders": tuple(self._colliders),
             },
         )
+
+
+def net_tensile_moduli(fabric: Fabric, *, diagonals: bool) -> tuple[float, float]:
+    """The tensile stiffness [N/m] the warp and weft elements carry, so that a strip of the net
+    pulled along either grain line (free to narrow) has the fabric's tensile stiffness.
+
+    The shear diagonals (2 G w / l each) stretch with the grid: a quad's pair adds G along the
+    warp and along the weft and couples the two. With A = a + G and C = b + G for element
+    moduli a (warp) and b (weft), a uniaxial pull along the warp stores
+    (A - G^2 / C) eps^2 / 2 per unit area, and along the weft (C - G^2 / A) eps^2 / 2; setting
+    these to the fabric's E_warp and E_weft gives
+
+        A = E_warp / 2 + sqrt(E_warp^2 / 4 + E_warp G^2 / E_weft)   (C likewise, swapped)
+
+    and the net's Poisson ratio G / C. Without diagonals (or with a membrane) a = E_warp and
+    b = E_weft."""
+    e1, e2, g = fabric.tensile_warp, fabric.tensile_weft, fabric.shear
+    if not diagonals or fabric.membrane or g == 0.0:
+        return e1, e2
+    a = 0.5 * e1 + np.sqrt(0.25 * e1 * e1 + e1 * g * g / e2) - g
+    b = 0.5 * e2 + np.sqrt(0.25 * e2 * e2 + e2 * g * g / e1) - g
+    if min(a, b) <= 0.0:
+        raise InvalidInput(f"fabric {fabric.name!r}: shear {g:.4g} N/m is too large for its tensile stiffnesses "
+                           f"{e1:.4g}/{e2:.4g} N/m (the net's diagonals alone would be stiffer in stretch)")
+    return float(a), float(b)
 
 
 def _membrane(net: ClothNet, fabric: Fabric) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

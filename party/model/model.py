@@ -112,6 +112,22 @@ class Model:
             kinematic_velocity=wp.zeros(self.node_count, dtype=wp.vec3, device=self.device),
         )
 
+    def bending_matrix(self):
+        """L = sum_h stiffness_h K_h K_h^T [N/m], the constant matrix of the bending stencils'
+        quadratic energy x^T L x / 2 (per coordinate; :mod:`party.meshing.hinges`), as a
+        scipy CSR matrix with sorted rows."""
+        import scipy.sparse as sp
+
+        h = self.host
+        nodes, weights, stiffness = h["hinge_nodes"], h["hinge_weights"], h["hinge_stiffness"]
+        rows = np.repeat(nodes, 4, axis=1).ravel()
+        cols = np.tile(nodes, (1, 4)).ravel()
+        values = (stiffness[:, None, None] * weights[:, :, None] * weights[:, None, :]).ravel()
+        matrix = sp.coo_matrix((values, (rows, cols)), shape=(self.node_count, self.node_count)).tocsr()
+        matrix.sum_duplicates()
+        matrix.sort_indices()
+        return matrix
+
     @property
     def triangles(self) -> np.ndarray:
         """Cloth triangles on the host, shape (t, 3)."""

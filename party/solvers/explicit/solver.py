@@ -53,7 +53,8 @@ class SolverExplicit:
 
             dt_crit = (sqrt(c^2 + 4 w^2) - c) / w^2   (2 / w without damping)
 
-        with w^2 the largest eigenvalue of M^-1/2 K M^-1/2 (K the springs' stiffness, M the
+        with w^2 the largest eigenvalue of M^-1/2 K M^-1/2 (K the springs' and the bending
+        stencils' stiffness, M the
         lumped masses) and c that of M^-1/2 C M^-1/2 (C the dampers' Laplacian), taken
         together as if they were one mode (conservative)."""
         return critical_time_step(self.model)
@@ -103,6 +104,8 @@ def critical_time_step(model: Model) -> float:
                 vals.append(sign * blocks[:, r, c])
     n = 3 * model.node_count
     K = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+    if model.hinge_count:
+        K = K + sp.kron(model.bending_matrix(), sp.identity(3), format="csr")
     scale = np.repeat(np.where(free, 1.0 / np.sqrt(h["mass"]), 0.0), 3)
     lam = _largest_eigenvalue(sp.diags(scale) @ K @ sp.diags(scale))
     c = h["element_params"][:, 2]

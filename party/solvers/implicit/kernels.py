@@ -12,18 +12,39 @@ def inertial_target(
     f_ext: wp.array(dtype=wp.vec3),
     gravity: wp.vec3,
     kinematic_velocity: wp.array(dtype=wp.vec3),
+    previous_acceleration: wp.array(dtype=wp.vec3),
     dt: float,
     y: wp.array(dtype=wp.vec3),
     x_iter: wp.array(dtype=wp.vec3),
 ):
-    """y = x + v dt + (G + f_ext / m) dt^2, the position inertia alone would reach [m]; the
-    iterate starts there. Kinematic nodes move with the control's velocity and stay there."""
+    """y = x + v dt + (G + f_ext / m) dt^2, the position inertia alone would reach [m].
+
+    The iterate starts at x + v dt + a dt^2 with a the part of the node's last acceleration
+    along gravity, between none and G (the adaptive start of Chen et al. 2024): a falling node
+    starts at y, a node at rest under load where it is. A solve cut short then leaves a node at
+    rest where it was in equilibrium; starting every node at y would leave part of the load's
+    dt^2 push in each unfinished solve, and cloth at rest would hang as if heavier. Kinematic
+    nodes move with the control's velocity and stay there."""
     i = wp.tid()
     if inv_mass[i] == 0.0:
         y[i] = x[i] + kinematic_velocity[i] * dt
+        x_iter[i] = y[i]
     else:
         y[i] = x[i] + v[i] * dt + (gravity + f_ext[i] * inv_mass[i]) * dt * dt
-    x_iter[i] = y[i]
+        g = wp.length(gravity)
+        a = wp.vec3(0.0)
+        if g > 0.0:
+            down = gravity / g
+            a = down * wp.clamp(wp.dot(previous_acceleration[i], down), 0.0, g)
+        x_iter[i] = x[i] + v[i] * dt + a * dt * dt
+
+
+@wp.kernel
+def record_acceleration(v_before: wp.array(dtype=wp.vec3), v_after: wp.array(dtype=wp.vec3), dt: float,
+                        acceleration: wp.array(dtype=wp.vec3)):
+    """The step's acceleration (v(t + dt) - v(t)) / dt [m/s^2], for the next step's start."""
+    i = wp.tid()
+    acceleration[i] = (v_after[i] - v_before[i]) / dt
 
 
 @wp.struct

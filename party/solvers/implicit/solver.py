@@ -13,7 +13,7 @@ from ...model import Control, Model, State
 from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..step_end import StepEnd
-from .kernels import block_descent, chebyshev_blend, inertial_target, step_velocity
+from .kernels import block_descent, chebyshev_blend, inertial_target, record_acceleration, step_velocity
 
 
 class SolverImplicit:
@@ -64,12 +64,13 @@ class SolverImplicit:
         self._x = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._x_previous = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._x_before = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._acceleration = wp.array(np.tile(np.array(model.gravity, np.float32), (n, 1)), dtype=wp.vec3, device=dev)
         self.chebyshev = float(chebyshev)
         offsets, other, params = node_springs(model)
         self._spring_offsets = wp.array(offsets, dtype=int, device=dev)
         self._spring_other = wp.array(other, dtype=int, device=dev)
         self._spring_params = wp.array(params.astype(np.float32), dtype=wp.vec3, device=dev)
-        bend = bending_matrix(model)
+        bend = model.bending_matrix()
         self._bend_offsets = wp.array(bend.indptr.astype(np.int32), dtype=int, device=dev)
         self._bend_nodes = wp.array(bend.indices.astype(np.int32), dtype=int, device=dev)
         self._bend_values = wp.array(bend.data.astype(np.float32), dtype=float, device=dev)
@@ -110,6 +111,8 @@ class SolverImplicit:
             wp.launch(kinetic_damping, dim=m.node_count,
                       inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=m.device)
         self.end.finish(state_in, state_out, dt)
+        wp.launch(record_acceleration, dim=m.node_count, inputs=[state_in.node_qd, state_out.node_qd, dt, self._acceleration],
+                  device=m.device)
 
     def _solve(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
         """The implicit solve, from state_in to v* in state_out: launches only, no host reads,
@@ -118,9 +121,10 @@ class SolverImplicit:
         dev = m.device
         wp.launch(inertial_target, dim=m.node_count,
                   inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
-                          control.kinematic_velocity, dt], outputs=[self._y, self._x], device=dev)
+                          control.kinematic_velocity, self._acceleration, dt], outputs=[self._y, self._x], device=dev)
         offsets = self.color_offsets
         omega = 1.0
+        wp.copy(self._x_before, self._x)
         for iteration in range(self.iterations):
             for c in range(len(offsets) - 1):
                 wp.launch(block_descent, dim=offsets[c + 1] - offsets[c],
@@ -132,7 +136,6 @@ class SolverImplicit:
                           device=dev)
             if self.chebyshev > 0.0:
                 if iteration == 0:
-                    wp.copy(self._x_before, self._y)
                     wp.copy(self._x_previous, self._x)
                     continue
                 rho2 = self.chebyshev ** 2
@@ -168,23 +171,6 @@ def node_triangles(model: Model) -> tuple[np.ndarray, np.ndarray]:
     offsets = np.zeros(model.node_count + 1, np.int64)
     np.add.at(offsets, rows + 1, 1)
     return np.cumsum(offsets).astype(np.int32), slots[order].astype(np.int32)
-
-
-def bending_matrix(model: Model):
-    """L = sum_h stiffness_h K_h K_h^T [N/m], the constant matrix of the hinges' quadratic
-    energy x^T L x / 2 (per coordinate), as a scipy CSR matrix with sorted rows."""
-    import scipy.sparse as sp
-
-    h = model.host
-    nodes, weights, stiffness = h["hinge_nodes"], h["hinge_weights"], h["hinge_stiffness"]
-    rows = np.repeat(nodes, 4, axis=1).ravel()
-    cols = np.tile(nodes, (1, 4)).ravel()
-    values = (stiffness[:, None, None] * weights[:, :, None] * weights[:, None, :]).ravel()
-    n = model.node_count
-    matrix = sp.coo_matrix((values, (rows, cols)), shape=(n, n)).tocsr()
-    matrix.sum_duplicates()
-    matrix.sort_indices()
-    return matrix
 
 
 def color_nodes(model: Model) -> tuple[list[int], np.ndarray]:

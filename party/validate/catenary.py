@@ -1,0 +1,116 @@
+"""Case 2: the catenary. A chain of nodes and a cloth strip, each hung from two pins at equal
+height, come to rest on the elastic catenary of their length, span, weight and stretch
+stiffness (:func:`party.validate.references.elastic_catenary`); the largest distance of a
+node from that curve must stay within 1 % of the span."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..fabric import Fabric
+from ..meshing import rectangular_net
+from ..model import ModelBuilder
+from ..units import GRAVITY
+from .checks import CaseResult, Check
+from .references import distance_to_curve, elastic_catenary
+from .simulate import settle
+
+NAME = "catenary"
+TOLERANCE = 0.01  # largest deviation over span
+LENGTH, SPAN, WIDTH = 0.5, 0.4, 0.04  # m
+SPACINGS = {"quick": 0.02, "default": 0.01}
+
+
+def run_case(fabric: Fabric, solver: str, *, quick: bool = False, out=None) -> CaseResult:
+    result = CaseResult(NAME)
+    spacing = SPACINGS["quick" if quick else "default"]
+    chain, reference = hang_chain(fabric, solver, spacing)
+    result.checks.append(Check.bound(NAME, "chain: largest deviation / span", _deviation(chain, reference) / SPAN,
+                                     TOLERANCE, "fraction of span"))
+    strip, reference = hang_strip(fabric, solver, spacing)
+    result.checks.append(Check.bound(NAME, f"{fabric.name} strip: largest deviation / span",
+                                     _deviation(strip, reference) / SPAN, TOLERANCE, "fraction of span"))
+    result.details["strip"] = {"simulated": strip.tolist(), "reference": reference.tolist()}
+    if out is not None:
+        result.plots.append(_plot(out, strip, reference, fabric.name))
+    return result
+
+
+def strip_deviation(fabric: Fabric, solver: str, spacing: float) -> float:
+    """The strip's largest deviation over the span at one spacing [m] (for convergence)."""
+    strip, reference = hang_strip(fabric, solver, spacing)
+    return _deviation(strip, reference) / SPAN
+
+
+def hang_chain(fabric: Fabric, solver: str, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """A chain standing for a strip WIDTH wide: nodes every ``spacing`` [m] of its LENGTH,
+    their masses and springs from the fabric. Returns the rest (x, z) of its nodes and the
+    reference curve."""
+    count = int(round(LENGTH / spacing)) + 1
+    segment = LENGTH / (count - 1)
+    mass = fabric.areal_density * WIDTH * segment
+    builder = ModelBuilder()
+    points = _v_shape(np.linspace(0.0, LENGTH, count))
+    ids = [builder.add_node(p, mass if 0 < k < count - 1 else 0.5 * mass, fabric=fabric) for k, p in enumerate(points)]
+    builder.pin([ids[0], ids[-1]])
+    axial = fabric.tensile_warp * WIDTH
+    builder.add_springs(np.c_[ids[:-1], ids[1:]], stiffness=axial / segment,
+                        damping=fabric.damping * WIDTH * segment, rest_length=segment)
+    model = builder.finalize()
+    state, _ = settle(model, solver, collision=None)
+    rest = state.positions()[:, [0, 2]]
+    return rest, elastic_catenary(LENGTH, SPAN, fabric.areal_density * WIDTH * GRAVITY, axial)
+
+
+def hang_strip(fabric: Fabric, solver: str, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """A cloth strip LENGTH by WIDTH (warp along its length) pinned along both ends. Returns the
+    rest (x, z) of its centre line's nodes and the reference curve."""
+    net = rectangular_net(LENGTH, WIDTH, spacing)
+    u, v = net.uv[:, 0], net.uv[:, 1]
+    builder = ModelBuilder()
+    builder.add_cloth(net, fabric, np.insert(_v_shape(u)[:, [0, 2]], 1, v, axis=1))
+    builder.pin(np.flatnonzero((u < 1e-9) | (u > LENGTH - 1e-9)))
+    model = builder.finalize()
+    state, _ = settle(model, solver, collision=None)
+    rest = state.positions()
+    middle = np.abs(v - 0.5 * WIDTH) < 0.25 * spacing
+    if not middle.any():  # an odd number of rows has its centre between two of them
+        middle = np.abs(v - v[np.argmin(np.abs(v - 0.5 * WIDTH))]) < 1e-9
+    reference = elastic_catenary(LENGTH, SPAN, fabric.areal_density * WIDTH * GRAVITY, fabric.tensile_warp * WIDTH)
+    return rest[middle][:, [0, 2]], reference
+
+
+def _v_shape(s: np.ndarray) -> np.ndarray:
+    """Start shape: two straight legs of LENGTH / 2 from pins SPAN apart (x, y = 0, z)."""
+    drop = math.sqrt((0.5 * LENGTH) ** 2 - (0.5 * SPAN) ** 2)
+    half = 0.5 * LENGTH
+    t = np.where(s <= half, s / half, (LENGTH - s) / half)
+    x = np.where(s <= half, 0.5 * SPAN * t, SPAN - 0.5 * SPAN * t)
+    return np.stack([x, np.zeros_like(s), -drop * t], axis=1)
+
+
+def _deviation(points: np.ndarray, reference: np.ndarray) -> float:
+    return float(distance_to_curve(points, reference).max())
+
+
+def _plot(out, strip: np.ndarray, reference: np.ndarray, fabric: str):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    ax.plot(reference[:, 0] * 100, reference[:, 1] * 100, "k-", lw=1, label="elastic catenary")
+    ax.plot(strip[:, 0] * 100, strip[:, 1] * 100, "o", ms=3, color="tab:red", label=f"{fabric} strip, simulated")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [cm]")
+    ax.set_ylabel("z [cm]")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set_title("Catenary: rest shape")
+    fig.tight_layout()
+    path = out / "catenary.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
