@@ -117,10 +117,44 @@ def drape_command(
     out.print(f"results in {out_dir}/")
 
 
+@app.command("validate")
+def validate_command(
+    case: Optional[str] = typer.Option(None, "--case", help="One case (default: all): oscillation, catenary, cantilever, "
+                                       "friction, restitution, cusick, cusick-measured, convergence."),
+    fabric: Optional[str] = typer.Option(None, "--fabric", help="Fabric: a library name or a .toml/.json file "
+                                         "(default: cotton; Cusick: every library fabric)."),
+    solver: str = typer.Option("explicit", "--solver", help="explicit (the paper's, the reference) or implicit."),
+    out_dir: Path = typer.Option(Path("out/validate"), "--out", help="Output folder (results.json and PNG plots)."),
+    quick: bool = typer.Option(False, "--quick", help="Coarse resolutions: the CI's run."),
+) -> None:
+    """Run the validation cases and print each quantity against its reference; exit status 1
+    when any misses its tolerance."""
+    from .fabric import fabric_by_name
+    from .solvers.select import check_solver
+    from .validate import case_names, run_validation
+    from .validate.report import print_table, write_results
+
+    names = case_names(case)
+    chosen = None if fabric is None else fabric_by_name(fabric)
+    check_solver(solver)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with out.status("validating") as status:
+        results = run_validation(names, chosen, solver, out_dir, quick=quick,
+                                 on_case=lambda name: status.update(f"validating: {name}"))
+    print_table(results, out)
+    write_results(results, out_dir / "results.json",
+                  {"cases": names, "fabric": fabric, "solver": solver, "quick": quick})
+    failed = [c for r in results for c in r.checks if not c.passed]
+    out.print(f"{sum(len(r.checks) for r in results) - len(failed)} of {sum(len(r.checks) for r in results)} checks "
+              f"passed; results in {out_dir}/results.json")
+    if failed:
+        raise typer.Exit(1)
+
+
 def main() -> None:
     """Entry point: user errors become one line on stderr and exit status 1."""
     try:
-        app(standalone_mode=False)
+        status = app(standalone_mode=False)
     except PartyError as exc:
         err.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
         raise SystemExit(1)
@@ -134,6 +168,8 @@ def main() -> None:
             exc.show()
             raise SystemExit(exc.exit_code)
         raise
+    if isinstance(status, int) and status:
+        raise SystemExit(status)
 
 
 if __name__ == "__main__":

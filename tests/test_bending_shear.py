@@ -1,4 +1,4 @@
-"""Bending hinges and shear diagonals against plate and membrane theory."""
+"""Bending stencils and shear diagonals against plate and membrane theory."""
 
 import numpy as np
 import pytest
@@ -23,14 +23,40 @@ def cylinder(net, radius, angle_deg):
     return np.c_[radius * np.sin(u / radius), v, radius * (1.0 - np.cos(u / radius))]
 
 
-@pytest.mark.parametrize("angle", [0.0, 90.0])
-def test_bending_along_the_grain_stores_the_plate_energy(angle):
-    """A plate of rigidity B bent to radius R stores B / (2 R^2) per unit area."""
+@pytest.mark.parametrize("angle", [0.0, 45.0, 90.0])
+def test_bending_in_any_direction_stores_the_plate_energy(angle):
+    """A plate of rigidity B bent to radius R stores B / (2 R^2) per unit area, along the
+    grain and along the bias alike (the stencils' plate has Poisson's ratio 0)."""
     net = rectangular_net(0.4, 0.4, 0.005)
     nodes, weights, scale = hinges(net)
     radius = 0.3
     energy = bending_energy(cylinder(net, radius, angle), nodes, weights, scale, B)
     assert energy == pytest.approx(B / (2 * radius**2) * 0.16, rel=0.015)
+
+
+def test_a_cantilever_strip_converges_to_the_beam_solution():
+    """Small deflection of a strip clamped at one end under its weight: tip drop W L^4 / (8 B)
+    (linear beam theory), approached at first order in the spacing (the clamp's stencil)."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as sla
+
+    overhang, errors = 0.05, []
+    for segments in (10, 20, 40):
+        h = overhang / segments
+        net = rectangular_net(overhang + 2 * h, 4 * h, h)
+        u = net.uv[:, 0] - 2 * h
+        nodes, weights, scale = hinges(net)
+        n = net.node_count
+        L = sp.csr_matrix(((B * scale[:, None, None] * weights[:, :, None] * weights[:, None, :]).ravel(),
+                           (np.repeat(nodes, 4, axis=1).ravel(), np.tile(nodes, (1, 4)).ravel())), shape=(n, n))
+        free = u > 1e-12
+        load = net.node_areas()  # W = 1 N/m^2
+        z = np.zeros(n)
+        z[free] = sla.spsolve(L[free][:, free].tocsc(), -load[free])
+        tip = -z[np.isclose(u, overhang)].mean()
+        errors.append(tip / (overhang**4 / (8 * B)) - 1.0)
+    assert errors[-1] < 0.06
+    assert errors[1] / errors[2] == pytest.approx(2.0, rel=0.1)
 
 
 def test_flat_cloth_in_any_pose_stores_no_bending_energy(rng):

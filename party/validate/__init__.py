@@ -40,20 +40,18 @@ def case_names(name: str | None) -> list[str]:
 
 def run_validation(names: list[str], fabric: Fabric | None, solver: str, out: Path | None, *, quick: bool = False,
                    on_case: Callable[[str], None] | None = None) -> list[CaseResult]:
-    """Run the cases ``names`` with ``fabric`` (None: each case's default) and ``solver``,
-    writing plots into ``out``."""
+    """Run the cases ``names`` with ``solver`` and ``fabric`` (None: cotton, and every library
+    fabric for the Cusick cases), writing plots into ``out``; ``on_case(name)`` is called as
+    each starts."""
     from ..fabric import fabric_by_name
 
     results = []
-    given = fabric
     for name in names:
         if on_case is not None:
             on_case(name)
-        run = CASES[name][0]
+        given = fabric if fabric is not None or name in LIBRARY_CASES else fabric_by_name(DEFAULT_FABRIC)
         start = time.perf_counter()
-        if fabric is None and name not in LIBRARY_CASES:
-            fabric = fabric_by_name(DEFAULT_FABRIC)
-        result = run(fabric if name not in LIBRARY_CASES else given, solver, quick=quick, out=out)
+        result = CASES[name][0](given, solver, quick=quick, out=out)
         result.wall_seconds = time.perf_counter() - start
         results.append(result)
     return results

@@ -88,6 +88,8 @@ def bending_length_test(fabric: Fabric, solver: str, segments: int) -> tuple[flo
 
     for _ in range(3):
         overhang = estimate()
+        if not 0.5 * min(tried) < overhang < 2.0 * max(tried):
+            break  # the chord is far from 41.5 degrees at every overhang tried: report what was found
         if min(abs(overhang - o) for o in tried) < 1e-4 * overhang:
             break
         tried[overhang] = overhang_shape(fabric, solver, overhang, segments)

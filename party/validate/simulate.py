@@ -61,7 +61,8 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = B
     Raises :class:`SimulationUnstable` on blow-up and when ``max_seconds`` of simulated time
     pass first (default 30 s for the explicit solver; 300 s for the implicit one, whose
     sweeps, cut short in finely meshed stiff cloth, let the last millimetres creep in over
-    tens of seconds).
+    tens of seconds, so it must also creep five times slower than ``rest_speed`` to be at
+    rest).
 
     Damped dynamics (dynamic relaxation): the solver's own steps, each followed by a uniform
     drag that keeps exp(-dt / ``memory``) of the velocity (``memory`` [s], so both solvers
@@ -81,6 +82,8 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = B
     last = state.positions()
     quiet = 0
     max_seconds = max_seconds or (30.0 if solver == "explicit" else 300.0)
+    if solver == "implicit":
+        rest_speed *= 0.2  # its last millimetres creep in slowly: ask for a slower creep
     steps = int(max_seconds / dt)
     for it in range(1, steps + 1):
         stepper.step(state, scratch, control, dt)

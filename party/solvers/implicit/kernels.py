@@ -12,39 +12,40 @@ def inertial_target(
     f_ext: wp.array(dtype=wp.vec3),
     gravity: wp.vec3,
     kinematic_velocity: wp.array(dtype=wp.vec3),
-    previous_acceleration: wp.array(dtype=wp.vec3),
+    previous_correction: wp.array(dtype=wp.vec3),
     dt: float,
     y: wp.array(dtype=wp.vec3),
     x_iter: wp.array(dtype=wp.vec3),
 ):
     """y = x + v dt + (G + f_ext / m) dt^2, the position inertia alone would reach [m].
 
-    The iterate starts at x + v dt + a dt^2 with a the part of the node's last acceleration
-    along gravity, between none and G (the adaptive start of Chen et al. 2024): a falling node
-    starts at y, a node at rest under load where it is. A solve cut short then leaves a node at
-    rest where it was in equilibrium; starting every node at y would leave part of the load's
-    dt^2 push in each unfinished solve, and cloth at rest would hang as if heavier. Kinematic
-    nodes move with the control's velocity and stay there."""
+    The iterate starts at y, moved back against gravity by as much as the last solve moved the
+    node back from its own y (between nothing and the whole of G dt^2; after Chen et al.'s
+    adaptive start). A falling or sliding node starts at y, which is exact for it; a node the
+    cloth holds up starts where it is. A solve cut short then leaves cloth at rest in
+    equilibrium: starting every node at y leaves part of the weight's dt^2 push in each
+    unfinished solve, and a pinned strip hangs as if many times heavier. Kinematic nodes move
+    with the control's velocity and stay there."""
     i = wp.tid()
     if inv_mass[i] == 0.0:
         y[i] = x[i] + kinematic_velocity[i] * dt
         x_iter[i] = y[i]
     else:
         y[i] = x[i] + v[i] * dt + (gravity + f_ext[i] * inv_mass[i]) * dt * dt
+        start = y[i]
         g = wp.length(gravity)
-        a = wp.vec3(0.0)
         if g > 0.0:
             down = gravity / g
-            a = down * wp.clamp(wp.dot(previous_acceleration[i], down), 0.0, g)
-        x_iter[i] = x[i] + v[i] * dt + a * dt * dt
+            back = wp.clamp(wp.dot(previous_correction[i], down), -g * dt * dt, 0.0)
+            start = start + back * down
+        x_iter[i] = start
 
 
 @wp.kernel
-def record_acceleration(v_before: wp.array(dtype=wp.vec3), v_after: wp.array(dtype=wp.vec3), dt: float,
-                        acceleration: wp.array(dtype=wp.vec3)):
-    """The step's acceleration (v(t + dt) - v(t)) / dt [m/s^2], for the next step's start."""
+def record_correction(x: wp.array(dtype=wp.vec3), y: wp.array(dtype=wp.vec3), correction: wp.array(dtype=wp.vec3)):
+    """The solve's correction x - y to the inertial target [m], for the next step's start."""
     i = wp.tid()
-    acceleration[i] = (v_after[i] - v_before[i]) / dt
+    correction[i] = x[i] - y[i]
 
 
 @wp.struct

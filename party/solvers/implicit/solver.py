@@ -13,7 +13,7 @@ from ...model import Control, Model, State
 from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..step_end import StepEnd
-from .kernels import block_descent, chebyshev_blend, inertial_target, record_acceleration, step_velocity
+from .kernels import block_descent, chebyshev_blend, inertial_target, record_correction, step_velocity
 
 
 class SolverImplicit:
@@ -64,7 +64,7 @@ class SolverImplicit:
         self._x = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._x_previous = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._x_before = wp.zeros(n, dtype=wp.vec3, device=dev)
-        self._acceleration = wp.array(np.tile(np.array(model.gravity, np.float32), (n, 1)), dtype=wp.vec3, device=dev)
+        self._correction = wp.zeros(n, dtype=wp.vec3, device=dev)
         self.chebyshev = float(chebyshev)
         offsets, other, params = node_springs(model)
         self._spring_offsets = wp.array(offsets, dtype=int, device=dev)
@@ -111,8 +111,6 @@ class SolverImplicit:
             wp.launch(kinetic_damping, dim=m.node_count,
                       inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=m.device)
         self.end.finish(state_in, state_out, dt)
-        wp.launch(record_acceleration, dim=m.node_count, inputs=[state_in.node_qd, state_out.node_qd, dt, self._acceleration],
-                  device=m.device)
 
     def _solve(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
         """The implicit solve, from state_in to v* in state_out: launches only, no host reads,
@@ -121,7 +119,7 @@ class SolverImplicit:
         dev = m.device
         wp.launch(inertial_target, dim=m.node_count,
                   inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
-                          control.kinematic_velocity, self._acceleration, dt], outputs=[self._y, self._x], device=dev)
+                          control.kinematic_velocity, self._correction, dt], outputs=[self._y, self._x], device=dev)
         offsets = self.color_offsets
         omega = 1.0
         wp.copy(self._x_before, self._x)
@@ -142,6 +140,7 @@ class SolverImplicit:
                 omega = 2.0 / (2.0 - rho2) if iteration == 1 else 4.0 / (4.0 - rho2 * omega)
                 wp.launch(chebyshev_blend, dim=m.node_count, inputs=[self._x, self._x_previous, self._x_before, omega],
                           device=dev)
+        wp.launch(record_correction, dim=m.node_count, inputs=[self._x, self._y, self._correction], device=dev)
         wp.launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._x, dt],
                   outputs=[state_out.node_q, state_out.node_qd], device=dev)
 

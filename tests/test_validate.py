@@ -1,0 +1,124 @@
+"""`party validate`: each case at CI resolution meets the tolerances of the issue, and the
+references it compares with are right."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from party.fabric import fabric_by_name
+from party.validate import cantilever, catenary, cusick, friction, oscillation, restitution
+from party.validate.references import chord_angle, elastic_catenary, heavy_elastica
+
+SOLVERS = ("explicit", "implicit")
+COTTON = fabric_by_name("cotton")
+
+
+def assert_passed(result):
+    failed = [f"{c.quantity}: {c.simulated} vs {c.reference} (error {c.error}, tolerance {c.tolerance})"
+              for c in result.checks if not c.passed]
+    assert result.checks and not failed, failed
+
+
+@pytest.mark.parametrize("gamma,drop", [(0.1, 0.0125), (1, 0.1246), (8, 0.8843), (20, 1.8639), (100, 5.8881)])
+def test_heavy_elastica_matches_the_published_tip_drops(gamma, drop):
+    tip = heavy_elastica(gamma)[-1]
+    assert -tip[1] / tip[0] == pytest.approx(drop, abs=2e-4)
+
+
+def test_chord_reaches_41_5_degrees_at_gamma_8():
+    assert chord_angle(heavy_elastica(8.0)) == pytest.approx(41.5, abs=0.05)
+
+
+def test_stiff_elastic_catenary_is_the_cosh_catenary():
+    from scipy.optimize import brentq
+
+    curve = elastic_catenary(1.0, 0.8, 1.0, 1e9)
+    a = brentq(lambda a: 2 * a * np.sinh(0.4 / a) - 1.0, 0.01, 10.0)
+    x = curve[:, 0]
+    assert np.allclose(curve[:, 1], a * (np.cosh((x - 0.4) / a) - np.cosh(0.4 / a)), atol=1e-7)
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_oscillation_periods_within_1_percent(solver):
+    assert_passed(oscillation.run_case(COTTON, solver, quick=True))
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_catenary_within_1_percent_of_span(solver):
+    assert_passed(catenary.run_case(COTTON, solver, quick=True))
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_friction_cone_decides_and_slides_at_g_sin_minus_mu_cos(solver):
+    assert_passed(friction.run_case(COTTON, solver, quick=True))
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_restitution_within_1_percent(solver):
+    assert_passed(restitution.run_case(COTTON, solver, quick=True))
+
+
+def test_cantilever_bending_length_within_3_percent(tmp_path):
+    result = cantilever.run_case(COTTON, "explicit", quick=True, out=tmp_path)
+    assert_passed(result)
+    assert (tmp_path / "cantilever.png").stat().st_size > 10_000
+
+
+def test_cantilever_needs_a_bending_rigidity():
+    result = cantilever.run_case(fabric_by_name("wool_flannel"), "explicit", quick=True)
+    assert result.checks == [] and result.details["skipped"] == "fabric 'wool_flannel' has no bending rigidity"
+
+
+def test_cusick_stiff_fabric_drapes_less_than_limp_one():
+    """Denim (B 17 uN*m at 0.40 kg/m^2) stands out further than silk (2 uN*m at 0.05); both
+    lie between hanging straight (DC 0) and not draping at all (DC 1), with folds."""
+    spacing = cusick.SPACINGS["quick"]
+    denim = cusick.drape_test(fabric_by_name("denim"), "explicit", spacing)
+    silk = cusick.drape_test(fabric_by_name("silk"), "explicit", spacing)
+    assert 0.0 < silk.coefficient < denim.coefficient < 1.0
+    assert denim.nodes >= 3 and silk.nodes >= 3
+
+
+def test_fold_count_of_a_known_outline():
+    angle = np.linspace(-math.pi, math.pi, 400, endpoint=False)
+    outline = np.stack([angle, 0.12 + 0.02 * np.cos(6 * angle)], axis=1)
+    assert cusick.count_folds(outline) == 6
+
+
+def party(*args):
+    return subprocess.run([sys.executable, "-m", "party.cli", *args], capture_output=True, text=True, timeout=900)
+
+
+def test_validate_command_writes_results_and_exits_zero_when_all_pass(tmp_path):
+    run = party("validate", "--case", "restitution", "--quick", "--out", str(tmp_path))
+    assert run.returncode == 0, run.stderr
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert results["passed"] is True
+    assert [c["case"] for c in results["cases"]] == ["restitution"]
+    assert all(c["passed"] for c in results["cases"][0]["checks"])
+
+
+def test_validate_command_exits_non_zero_when_a_case_misses(tmp_path):
+    """A soft fabric whose plastic limit (1 %) stops it stretching as far as the elastic
+    catenary of its tensile stiffness says: the strip misses the reference, the command says
+    FAIL and exits 1, and results.json records it."""
+    fabric = tmp_path / "limited.toml"
+    fabric.write_text("areal_density = 0.2\ntensile_warp = 5\ntensile_weft = 5\ndamping = 1\n"
+                      "strain_limit = 0.01\n")
+    run = party("validate", "--case", "catenary", "--quick", "--fabric", str(fabric), "--out", str(tmp_path / "out"))
+    assert run.returncode == 1, run.stdout + run.stderr
+    assert "FAIL" in run.stdout
+    results = json.loads((tmp_path / "out" / "results.json").read_text())
+    checks = results["cases"][0]["checks"]
+    assert results["passed"] is False and checks[0]["passed"] and not checks[1]["passed"]
+
+
+def test_validate_unknown_case_is_one_line_error(tmp_path):
+    run = party("validate", "--case", "drop", "--out", str(tmp_path))
+    assert run.returncode == 1
+    assert run.stderr.strip() == ("error: unknown validation case 'drop'; known: oscillation, catenary, cantilever, "
+                                  "friction, restitution, cusick, cusick-measured, convergence")
