@@ -42,6 +42,11 @@ class Fabric:
         bending_rigidity: Bending rigidity B [N*m]: moment per unit width per unit curvature,
             carried by dihedral hinges on the triangles' interior edges (0: none, as in the
             paper).
+        bending_hysteresis: Kawabata's bending hysteresis 2HB [N*m/m]: the width of the
+            moment-curvature loop. Bending then meets a frictional moment of up to HB = 2HB / 2
+            per unit width, which holds the cloth in any shape where it is not exceeded (a
+            Jenkins element, 5 times as stiff as the bending, beside each bending stencil);
+            0: none.
         membrane: Carry the in-plane elasticity on the triangles as a continuum membrane
             (orthotropic St. Venant-Kirchhoff in plane stress: Young's moduli times thickness
             ``tensile_warp`` and ``tensile_weft`` [N/m], shear modulus times thickness
@@ -66,6 +71,7 @@ class Fabric:
     thickness: float = 3.0e-3
     shear: float = 0.0
     bending_rigidity: float = 0.0
+    bending_hysteresis: float = 0.0
     membrane: bool = False
     poisson: float = 0.0
     description: str = ""
@@ -77,13 +83,16 @@ class Fabric:
             value = getattr(self, field)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInput(f"fabric {self.name!r}: {field} must be positive and finite, got {value}")
-        for field in ("damping", "shear", "bending_rigidity"):
+        for field in ("damping", "shear", "bending_rigidity", "bending_hysteresis"):
             value = getattr(self, field)
             if not (math.isfinite(value) and value >= 0.0):
                 raise InvalidInput(f"fabric {self.name!r}: {field} must be non-negative and finite, got {value}")
         if not (0.0 <= self.poisson and self.poisson**2 * self.tensile_weft / self.tensile_warp < 1.0):
             raise InvalidInput(f"fabric {self.name!r}: poisson must be non-negative with "
                                f"poisson^2 tensile_weft / tensile_warp below 1, got {self.poisson}")
+        if self.bending_hysteresis > 0.0 and self.bending_rigidity == 0.0:
+            raise InvalidInput(f"fabric {self.name!r}: bending_hysteresis needs a bending_rigidity (its friction acts "
+                               "beside the bending stencils)")
         if not self.strain_limit > 0.0:
             raise InvalidInput(f"fabric {self.name!r}: strain_limit must be positive, got {self.strain_limit}")
         for field in ("restitution", "momentum_propagation", "cloth_friction"):
@@ -119,6 +128,7 @@ _KES = {
     "tensile_weft_kes": ("tensile_weft", units.tensile_stiffness_from_kes),
     "shear_kes": ("shear", units.shear_stiffness_from_kes),
     "bending_rigidity_kes": ("bending_rigidity", units.bending_rigidity_from_kes),
+    "bending_hysteresis_kes": ("bending_hysteresis", units.bending_hysteresis_from_kes),
 }
 
 

@@ -103,7 +103,6 @@ def collide_body(
     candidates: wp.array(dtype=int, ndim=2),
     candidate_count: wp.array(dtype=int),
     dt: float,
-    resting_speed: float,
     contacts: wp.array(dtype=int),
 ):
     """One detection-and-response pass for each free node over its candidate triangles.
@@ -165,7 +164,7 @@ def collide_body(
     if wp.dot(n, nf) <= 0.0:
         n = nf
     vbody = interpolate(best_w, body_qd[fa], body_qd[fb], body_qd[fc])
-    vnew = friction_restitution_response(vi - vbody, n, friction[i], restitution[i], resting_speed) + vbody
+    vnew = friction_restitution_response(vi - vbody, n, friction[i], restitution[i]) + vbody
     s_end = wp.dot(x0 - a, nf) + wp.dot(vnew - vbody, nf) * dt
     if s_end < eps:
         x[i] = x0 + (eps - s_end) * nf

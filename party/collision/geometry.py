@@ -62,19 +62,13 @@ def boxes_overlap(lo0: wp.vec3, hi0: wp.vec3, lo1: wp.vec3, hi1: wp.vec3) -> boo
 
 
 @wp.func
-def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: float, resting_speed: float) -> wp.vec3:
+def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: float) -> wp.vec3:
     """Eqs. (8)-(11): the new relative velocity of a node striking a body.
 
     ``vr`` is the node's velocity relative to the body point, ``n`` the body normal there.
     Split vr into normal and tangential parts; inside the friction cone (|v_t| < mu |v_n|) the
     tangential part stops, outside it shrinks by mu |v_n|; the normal part reverses, scaled by
     the restitution sigma. Only approaching velocities (v . n < 0) change.
-
-    A node approaching no faster than ``resting_speed`` [m/s] (what gravity adds in a step or
-    two) rests on the body rather than striking it: its normal part stops without rebound.
-    Otherwise a resting node would hop by sigma g dt every step and meet the body the next step
-    with its normal speed short by that much, weakening its friction by the factor 1 + sigma
-    (the friction case of ``party validate`` measures it).
     """
     un = wp.dot(vr, n)
     if un >= 0.0:
@@ -87,8 +81,6 @@ def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: flo
         vt = wp.vec3(0.0)
     else:
         vt = vt * ((speed_t - limit) / speed_t)
-    if -un <= resting_speed:
-        return vt
     return vt - sigma * vn
 
 

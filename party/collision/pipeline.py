@@ -15,10 +15,6 @@ from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_c
                     gather_cloth_triangles_bvh, respond_cloth)
 from .intervals import AxisIntervalLists, moved_beyond
 
-RESTING_STEPS = 2.0
-"""A node meeting a body no faster than gravity makes it in this many steps rests on it
-without rebound (see :func:`party.collision.geometry.friction_restitution_response`)."""
-
 
 @dataclass(frozen=True)
 class CollisionSettings:
@@ -77,7 +73,6 @@ class CollisionPipeline:
         self._overflow = wp.zeros(1, dtype=int, device=dev)
         self._x_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._thickness = float(model.node_thickness.numpy().max())
-        self._gravity = float(np.linalg.norm(np.array(model.gravity, dtype=float)))
         if self.has_body:
             colliders = model.host["colliders"]
             size = max(_triangle_size(c.vertices, c.faces) for c in colliders)
@@ -142,8 +137,7 @@ class CollisionPipeline:
         wp.launch(collide_body, dim=m.node_count,
                   inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution,
                           state.collider_q, state.collider_qd, m.collider_normals, m.collider_faces,
-                          self.body_faces, self.body_face_count, dt,
-                          RESTING_STEPS * self._gravity * dt, self.contacts], device=m.device)
+                          self.body_faces, self.body_face_count, dt, self.contacts], device=m.device)
 
     def _search(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         m = self.model

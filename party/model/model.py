@@ -41,11 +41,16 @@ class Model:
         triangle_membrane_area: Rest area [m^2] of each membrane triangle, 0 for the others.
         triangle_membrane_c: Plane-stress stiffness [N/m] of each triangle, (E11, E22, 2 E12)
             to stress resultants, mat33.
-        hinge_nodes: (a, b, c, d) per bending hinge: interior edge (a, b), opposite corners c
-            and d (:mod:`party.meshing.hinges`), vec4i.
-        hinge_weights: Cotangent weights K of each hinge's curvature vector sum_i K_i x_i, vec4.
-        hinge_stiffness: B / (A_0 + A_1) [N/m] of each hinge: its energy is
-            stiffness * |sum_i K_i x_i|^2 / 2.
+        hinge_nodes: The nodes of each bending stencil (:mod:`party.meshing.hinges`), vec4i.
+        hinge_weights: Weights K of each stencil's curvature vector k = sum_i K_i x_i
+            [1/m^2], vec4.
+        hinge_stiffness: B * scale [N*m^3] of each stencil: its energy is
+            stiffness * |k|^2 / 2.
+        hinge_friction: Stiffness of each stencil's bending-hysteresis (Jenkins) element while
+            it sticks [N*m^3]: energy friction * |k - k_slip|^2 / 2, with k_slip the
+            State's ``hinge_slip``; 0 without hysteresis.
+        hinge_slip_limit: The largest |friction * (k - k_slip)| before the element slips
+            [N*m]: HB * scale.
         collider_faces: Triangles of all colliders together, int32 shape [c, 3].
         collider_rest_points: Collider vertex positions at set-up [m].
         collider_normals: Collider normals at each face corner at set-up, unit, vec3 shape
@@ -86,6 +91,8 @@ class Model:
     hinge_nodes: wp.array
     hinge_weights: wp.array
     hinge_stiffness: wp.array
+    hinge_friction: wp.array
+    hinge_slip_limit: wp.array
     collider_names: tuple[str, ...]
     collider_face_ranges: tuple[tuple[int, int], ...]
     collider_faces: wp.array
@@ -103,7 +110,8 @@ class Model:
             v.assign(np.broadcast_to(np.asarray(velocity, np.float32), (self.node_count, 3)).copy())
         cq = wp.clone(self.collider_rest_points)
         cv = wp.array(self.collider_velocity.astype(np.float32), dtype=wp.vec3, device=self.device)
-        return State(node_q=q, node_qd=v, collider_q=cq, collider_qd=cv, time=0.0)
+        slip = wp.zeros(self.hinge_count, dtype=wp.vec3, device=self.device)
+        return State(node_q=q, node_qd=v, collider_q=cq, collider_qd=cv, hinge_slip=slip, time=0.0)
 
     def control(self) -> Control:
         """Default control: no wind, kinematic nodes held still."""
@@ -114,12 +122,14 @@ class Model:
 
     def bending_matrix(self):
         """L = sum_h stiffness_h K_h K_h^T [N/m], the constant matrix of the bending stencils'
-        quadratic energy x^T L x / 2 (per coordinate; :mod:`party.meshing.hinges`), as a
+        quadratic energy x^T L x / 2 (per coordinate; :mod:`party.meshing.hinges`), the
+        bending hysteresis's sticking stiffness included, as a
         scipy CSR matrix with sorted rows."""
         import scipy.sparse as sp
 
         h = self.host
-        nodes, weights, stiffness = h["hinge_nodes"], h["hinge_weights"], h["hinge_stiffness"]
+        nodes, weights = h["hinge_nodes"], h["hinge_weights"]
+        stiffness = h["hinge_stiffness"] + h["hinge_friction"]
         rows = np.repeat(nodes, 4, axis=1).ravel()
         cols = np.tile(nodes, (1, 4)).ravel()
         values = (stiffness[:, None, None] * weights[:, :, None] * weights[:, None, :]).ravel()

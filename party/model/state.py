@@ -17,6 +17,9 @@ class State:
         node_qd: Node velocities dr/dt [m/s], vec3, shape [node_count].
         collider_q: Collider vertex positions [m], vec3.
         collider_qd: Collider vertex velocities [m/s], vec3 (enter eq. 12).
+        hinge_slip: Where each bending stencil's hysteresis element has slipped to: its
+            curvature vector at rest, in the stencil's own frame (along the thread, the
+            normal, and across), vec3 [1/m] (see ``Model.hinge_friction``).
         time: Simulated time [s].
     """
 
@@ -24,6 +27,7 @@ class State:
     node_qd: wp.array
     collider_q: wp.array
     collider_qd: wp.array
+    hinge_slip: wp.array
     time: float
 
     def positions(self) -> np.ndarray:
@@ -38,6 +42,7 @@ class State:
         wp.copy(self.node_qd, other.node_qd)
         wp.copy(self.collider_q, other.collider_q)
         wp.copy(self.collider_qd, other.collider_qd)
+        wp.copy(self.hinge_slip, other.hinge_slip)
         self.time = other.time
 
 

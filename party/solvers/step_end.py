@@ -10,6 +10,7 @@ from ..collision import CollisionPipeline, CollisionSettings
 from ..collision.crossing_guard import CrossingGuard
 from ..model import Model, State
 from .explicit.kernels import advance_positions, count_over_limit, plastic_limit
+from .hysteresis import BendingHysteresis
 
 PLASTIC_TOLERANCE = 5.0e-5
 """Relative length beyond the plastic limit left to the next step's sweeps (0.005 %)."""
@@ -22,6 +23,7 @@ class StepEnd:
         v(t + dt) = Collision(v*)        (5)
         r(t + dt) = r(t) + v(t + dt) dt  (4)
         crossing guard                   (ours; :mod:`party.collision.crossing_guard`)
+        bending hysteresis slips         (ours; :mod:`party.solvers.hysteresis`)
 
     Args:
         model: The model.
@@ -46,6 +48,7 @@ class StepEnd:
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
         guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
         self.guard = CrossingGuard(model) if guarded else None
+        self.hysteresis = BendingHysteresis(model)
 
     def finish(self, state_in: State, state_out: State, dt: float) -> None:
         """``state_out`` holds r(t) and v*; leave r(t + dt) and v(t + dt) there."""
@@ -66,6 +69,7 @@ class StepEnd:
         if self._moving_colliders:
             wp.launch(advance_positions, dim=len(state_out.collider_q),
                       inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
+        self.hysteresis.update(state_in, state_out)
         state_out.time = state_in.time + dt
 
     def _apply_plastic_limit(self, state: State, dt: float) -> None:

@@ -4,6 +4,12 @@ A cloth patch rests on a plane tilted by an angle a (gravity is tilted instead o
 which is the same thing). It must stay put while tan(a) < mu and slide while tan(a) > mu,
 decided correctly 2 degrees either side of atan(mu); sliding, it must accelerate at
 g (sin a - mu cos a).
+
+The patch is given no restitution. With sigma > 0 the paper's response (eqs. 8-11), applied
+step by step, makes a patch resting on a plane hop by sigma g dt each step; it then meets the
+plane the next step with its normal speed short by that much, and its friction is weakened by
+the factor 1 + sigma (measured: 1.927 instead of 1.796 m/s^2 at 40 degrees with sigma 0.03).
+That is the paper's model; restitution has its own case.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ STILL = 1e-4  # m: a patch that moved less than this in DURATION stayed put
 
 def run_case(fabric: Fabric, solver: str, *, quick: bool = False, out=None) -> CaseResult:
     result = CaseResult(NAME)
-    fabric = fabric.with_(friction=MU)
+    fabric = fabric.with_(friction=MU, restitution=0.0)
     threshold = math.degrees(math.atan(MU))
     for angle in (threshold - DECISION_MARGIN, threshold + DECISION_MARGIN):
         moved, _ = slide(fabric, solver, angle)

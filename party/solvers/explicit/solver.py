@@ -46,6 +46,8 @@ class SolverExplicit:
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         self._f_ext = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)
+        self._bending_stiffness = wp.array((model.host["hinge_stiffness"] + model.host["hinge_friction"]).astype(np.float32),
+                                           dtype=float, device=model.device)
 
     def critical_time_step(self) -> float:
         """Largest stable dt [s] of the net at rest with its dampers. For one mode
@@ -70,7 +72,9 @@ class SolverExplicit:
             self.air.accumulate(state_in.node_q, state_in.node_qd, control.wind, self._f_ext)
         if m.hinge_count:
             wp.launch(hinge_forces, dim=m.hinge_count,
-                      inputs=[state_in.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_stiffness, self._f_ext], device=dev)
+                      inputs=[state_in.node_q, m.hinge_nodes, m.hinge_weights, self._bending_stiffness, self._f_ext],
+                      device=dev)
+            self.end.hysteresis.add_forces(state_in, self._f_ext)
         wp.launch(net_forces_and_velocity, dim=m.node_count,
                   inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, m.node_element_offsets,
                           m.node_element_ids, m.element_nodes, m.element_rest_length, m.element_stiffness,

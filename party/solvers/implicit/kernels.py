@@ -24,7 +24,7 @@ def inertial_target(
     adaptive start). A falling or sliding node starts at y, which is exact for it; a node the
     cloth holds up starts where it is. A solve cut short then leaves cloth at rest in
     equilibrium: starting every node at y leaves part of the weight's dt^2 push in each
-    unfinished solve, and a pinned strip hangs as if many times heavier. Kinematic nodes move
+    unfinished solve, and cloth held up by its own stiffness hangs as if heavier. Kinematic nodes move
     with the control's velocity and stay there."""
     i = wp.tid()
     if inv_mass[i] == 0.0:

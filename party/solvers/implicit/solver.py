@@ -49,6 +49,9 @@ class SolverImplicit:
                  kinetic_damping: tuple[float, float] | None = None) -> None:
         if iterations < 1:
             raise InvalidInput(f"implicit solver needs at least 1 iteration, got {iterations}")
+        if float(model.host["hinge_friction"].max(initial=0.0)) > 0.0:
+            raise InvalidInput("bending hysteresis (a fabric with bending_hysteresis) is integrated by the explicit solver "
+                               "only; use --solver explicit")
         self.model = model
         self.kinetic_damping = kinetic_damping
         self.iterations = int(iterations)

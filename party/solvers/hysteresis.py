@@ -1,0 +1,119 @@
+"""Bending hysteresis (Kawabata's 2HB): a Jenkins element beside each bending stencil.
+
+Beside its bending stiffness k, each stencil (:mod:`party.meshing.hinges`) carries a spring
+of stiffness ``Model.hinge_friction`` = f k in series with a slider: energy
+f k |c - c_slip|^2 / 2 with c the stencil's curvature vector. While |f k (c - c_slip)| stays
+below ``Model.hinge_slip_limit`` (HB times the stencil's area) the element sticks; beyond, it
+slips, dragging c_slip along so that the moment stays at HB per unit width. Under cyclic bending
+the moment traces Kawabata's bilinear loop of width 2HB; at rest the cloth holds any shape
+where its bending moment lies within HB of equilibrium.
+
+The stiffness f k is part of ``Model.bending_matrix()`` (both solvers treat it with the
+bending); what the slip adds is a constant force per step, f k K_i c_slip on node i, added
+here to the step's external forces. c_slip is kept in the stencil's own frame (along its
+thread, its normal, across) so that it turns with the cloth.
+
+Explicit solver only. The implicit solver's sweeps, cut short on a finely meshed strip, leave
+kinks of a node's fall in the first steps; the slider takes them for bending beyond its limit,
+keeps them as set, and its lagged forces then grew without bound (seen on a 0.6 mm strip at
+1/300 s). The implicit solver refuses such fabrics with a one-line error.
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+from ..model import Model, State
+
+
+@wp.func
+def stencil_frame(x: wp.array(dtype=wp.vec3), n: wp.vec4i) -> wp.mat33:
+    """Rows: unit vector along the stencil, the normal of the plane its nodes span, across."""
+    along = x[n[2]] - x[n[0]]
+    side = x[n[3]] - x[n[0]]
+    normal = wp.cross(along, side)
+    if wp.length(normal) < 1.0e-12 * wp.length(along) * wp.length(side) or wp.length(along) == 0.0:
+        return wp.identity(n=3, dtype=float)
+    t = wp.normalize(along)
+    nn = wp.normalize(normal)
+    return wp.matrix_from_rows(t, nn, wp.cross(nn, t))
+
+
+@wp.func
+def curvature(x: wp.array(dtype=wp.vec3), n: wp.vec4i, w: wp.vec4) -> wp.vec3:
+    return w[0] * x[n[0]] + w[1] * x[n[1]] + w[2] * x[n[2]] + w[3] * x[n[3]]
+
+
+@wp.kernel
+def slip_forces(
+    x: wp.array(dtype=wp.vec3),
+    hinge_nodes: wp.array(dtype=wp.vec4i),
+    hinge_weights: wp.array(dtype=wp.vec4),
+    hinge_friction: wp.array(dtype=float),
+    slip: wp.array(dtype=wp.vec3),
+    f: wp.array(dtype=wp.vec3),
+):
+    """f_i += friction K_i c_slip [N] (c_slip turned into the world frame)."""
+    h = wp.tid()
+    s = hinge_friction[h]
+    if s == 0.0:
+        return
+    n = hinge_nodes[h]
+    w = hinge_weights[h]
+    c_slip = wp.transpose(stencil_frame(x, n)) * slip[h]
+    for c in range(4):
+        wp.atomic_add(f, n[c], s * w[c] * c_slip)
+
+
+@wp.kernel
+def update_slip(
+    x: wp.array(dtype=wp.vec3),
+    hinge_nodes: wp.array(dtype=wp.vec4i),
+    hinge_weights: wp.array(dtype=wp.vec4),
+    hinge_friction: wp.array(dtype=float),
+    hinge_slip_limit: wp.array(dtype=float),
+    slip_in: wp.array(dtype=wp.vec3),
+    slip_out: wp.array(dtype=wp.vec3),
+):
+    """After a step: where the element's force exceeds its limit, slide c_slip towards c
+    until it equals the limit."""
+    h = wp.tid()
+    s = hinge_friction[h]
+    if s == 0.0:
+        slip_out[h] = slip_in[h]
+        return
+    n = hinge_nodes[h]
+    frame = stencil_frame(x, n)
+    c_slip = wp.transpose(frame) * slip_in[h]
+    stretch = curvature(x, n, hinge_weights[h]) - c_slip
+    force = s * wp.length(stretch)
+    limit = hinge_slip_limit[h]
+    if force > limit:
+        c_slip = c_slip + stretch * ((force - limit) / force)
+    slip_out[h] = frame * c_slip
+
+
+class BendingHysteresis:
+    """The slip forces and the slip update of a model's hysteresis elements (does nothing for
+    models without)."""
+
+    def __init__(self, model: Model) -> None:
+        self.model = model
+        self.active = model.hinge_count > 0 and float(model.host["hinge_friction"].max(initial=0.0)) > 0.0
+
+    def add_forces(self, state: State, f: wp.array) -> None:
+        """Add the slip's constant forces at ``state`` to ``f`` [N]."""
+        if self.active:
+            m = self.model
+            wp.launch(slip_forces, dim=m.hinge_count,
+                      inputs=[state.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, state.hinge_slip, f],
+                      device=m.device)
+
+    def update(self, state_in: State, state_out: State) -> None:
+        """Carry the slip from ``state_in`` to ``state_out``, slipping where the step bent the
+        cloth beyond the limit."""
+        m = self.model
+        if self.active:
+            wp.launch(update_slip, dim=m.hinge_count,
+                      inputs=[state_out.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, m.hinge_slip_limit,
+                              state_in.hinge_slip, state_out.hinge_slip], device=m.device)
