@@ -122,3 +122,10 @@ def test_validate_unknown_case_is_one_line_error(tmp_path):
     assert run.returncode == 1
     assert run.stderr.strip() == ("error: unknown validation case 'drop'; known: oscillation, catenary, cantilever, "
                                   "friction, restitution, cusick, cusick-measured, convergence")
+
+
+def test_catenary_deviation_shrinks_with_the_spacing():
+    """Case 8's first part: each halving of the spacing brings the strip closer to the elastic
+    catenary."""
+    deviations = [catenary.strip_deviation(COTTON, "explicit", spacing) for spacing in (0.04, 0.02, 0.01)]
+    assert deviations[0] > deviations[1] > deviations[2]
