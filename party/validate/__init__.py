@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from ..errors import InvalidInput
+from ..errors import InvalidInput, SimulationUnstable
 from ..fabric import Fabric
 from . import cantilever, catenary, convergence, cusick, friction, oscillation, restitution
 from .checks import CaseResult, Check
@@ -51,7 +51,10 @@ def run_validation(names: list[str], fabric: Fabric | None, solver: str, out: Pa
             on_case(name)
         given = fabric if fabric is not None or name in LIBRARY_CASES else fabric_by_name(DEFAULT_FABRIC)
         start = time.perf_counter()
-        result = CASES[name][0](given, solver, quick=quick, out=out)
+        try:
+            result = CASES[name][0](given, solver, quick=quick, out=out)
+        except SimulationUnstable as problem:
+            result = CaseResult(name, [Check.decision(name, f"came to rest ({problem})", False, True)])
         result.wall_seconds = time.perf_counter() - start
         results.append(result)
     return results

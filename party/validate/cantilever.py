@@ -29,6 +29,7 @@ from ..meshing import rectangular_net
 from ..model import ModelBuilder
 from ..units import GRAVITY
 from .checks import CaseResult, Check
+from .report import plot_rest_shape, save
 from .references import chord_angle, distance_to_curve, heavy_elastica
 from .simulate import settle
 
@@ -132,24 +133,11 @@ def _interpolate(x: np.ndarray, y: np.ndarray, target: float) -> float:
 
 
 def _plot(out, shape: np.ndarray, elastica: np.ndarray, fabric: str):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(5, 4))
-    ax.plot(elastica[:, 0] * 1000, elastica[:, 1] * 1000, "k-", lw=1, label="heavy elastica")
-    ax.plot(shape[:, 0] * 1000, shape[:, 1] * 1000, "o", ms=3, color="tab:red", label=f"{fabric}, simulated")
+    fig, ax = plot_rest_shape(shape, elastica, simulated_label=f"{fabric}, simulated",
+                              reference_label="heavy elastica", title="Cantilever bending test (ASTM D1388)",
+                              unit="mm", scale=1000.0)
     tip = shape[-1] * 1000
     ax.plot([0, tip[0]], [0, tip[1]], "--", color="grey", lw=0.8, label=f"chord, {CHORD} deg")
     ax.axhline(0.0, color="grey", lw=0.5)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("z [mm]")
     ax.legend(fontsize=8)
-    ax.set_title("Cantilever bending test (ASTM D1388)")
-    fig.tight_layout()
-    path = out / "cantilever.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, out / "cantilever.png")

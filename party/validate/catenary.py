@@ -14,6 +14,7 @@ from ..meshing import rectangular_net
 from ..model import ModelBuilder
 from ..units import GRAVITY
 from .checks import CaseResult, Check
+from .report import plot_rest_shape, save
 from .references import distance_to_curve, elastic_catenary
 from .simulate import settle
 
@@ -96,21 +97,8 @@ def _deviation(points: np.ndarray, reference: np.ndarray) -> float:
 
 
 def _plot(out, strip: np.ndarray, reference: np.ndarray, fabric: str):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 3.5))
-    ax.plot(reference[:, 0] * 100, reference[:, 1] * 100, "k-", lw=1, label="elastic catenary")
-    ax.plot(strip[:, 0] * 100, strip[:, 1] * 100, "o", ms=3, color="tab:red", label=f"{fabric} strip, simulated")
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [cm]")
-    ax.set_ylabel("z [cm]")
+    fig, ax = plot_rest_shape(strip, reference, simulated_label=f"{fabric} strip, simulated",
+                              reference_label="elastic catenary", title="Catenary: rest shape", unit="cm",
+                              scale=100.0, size=(6.0, 3.5))
     ax.legend(loc="lower right", fontsize=8)
-    ax.set_title("Catenary: rest shape")
-    fig.tight_layout()
-    path = out / "catenary.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, out / "catenary.png")

@@ -34,6 +34,10 @@ def print_table(results: list[CaseResult], console) -> None:
             verdict = "reported" if c.error_kind == "reported" else ("[green]pass[/]" if c.passed else "[red]FAIL[/]")
             table.add_row(c.case, c.quantity, _number(c.simulated), _number(c.reference), error, _number(c.tolerance),
                           verdict)
+    if not console.is_terminal:  # a pipe or a log file: do not squeeze the table into 80 columns
+        from rich.console import Console
+
+        console = Console(file=console.file, width=160)
     console.print(table)
 
 
@@ -60,3 +64,38 @@ def _plain(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     raise TypeError(f"cannot write {type(value).__name__} to JSON")
+
+
+def figure(size: tuple[float, float]):
+    """A matplotlib figure and axes drawn off screen."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt.subplots(figsize=size)
+
+
+def save(fig, path: Path, dpi: int = 120) -> Path:
+    """Write ``fig`` to ``path`` (folders made) and close it."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
+def plot_rest_shape(simulated, reference, *, simulated_label: str, reference_label: str, title: str,
+                    unit: str, scale: float, size=(5.0, 4.0)):
+    """A simulated rest shape (dots) over its reference curve, both (x, z) [m], drawn in
+    ``unit`` (``scale`` per metre). Returns the figure and its axes, for additions."""
+    fig, ax = figure(size)
+    ax.plot(reference[:, 0] * scale, reference[:, 1] * scale, "k-", lw=1, label=reference_label)
+    ax.plot(simulated[:, 0] * scale, simulated[:, 1] * scale, "o", ms=3, color="tab:red", label=simulated_label)
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"x [{unit}]")
+    ax.set_ylabel(f"z [{unit}]")
+    ax.set_title(title)
+    return fig, ax
