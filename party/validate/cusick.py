@@ -64,7 +64,11 @@ def run_case(fabric: Fabric | None, solver: str, *, quick: bool = False, out=Non
     fabrics = [fabric] if fabric is not None else list(library().values())
     spacing = SPACINGS["quick" if quick else "default"]
     for f in fabrics:
-        drape = drape_test(f, solver, spacing)
+        try:
+            drape = drape_test(f, solver, spacing)
+        except SimulationUnstable as problem:
+            result.checks.append(Check.decision(NAME, f"came to rest ({problem})", False, True))
+            continue
         result.checks.append(Check.report(NAME, f"{f.name} drape coefficient DC [%]", 100.0 * drape.coefficient))
         result.checks.append(Check.report(NAME, f"{f.name} nodes (folds)", drape.nodes))
         result.details[f.name] = {"dc_percent": 100.0 * drape.coefficient, "nodes": drape.nodes}
@@ -82,7 +86,11 @@ def run_measured(fabric: Fabric | None, solver: str, *, quick: bool = False, out
         return result
     spacing = SPACINGS["quick" if quick else "default"]
     for fabric, dc, folds in measured_fabrics():
-        drape = drape_test(fabric, solver, spacing)
+        try:
+            drape = drape_test(fabric, solver, spacing)
+        except SimulationUnstable as problem:
+            result.checks.append(Check.decision("cusick-measured", f"came to rest ({problem})", False, True))
+            continue
         result.checks.append(Check.absolute("cusick-measured", f"{fabric.name} DC [%]", 100.0 * drape.coefficient, dc,
                                             DC_TOLERANCE, "DC points"))
         result.checks.append(Check.absolute("cusick-measured", f"{fabric.name} nodes", drape.nodes, folds,
