@@ -79,7 +79,7 @@ def bending_length_test(fabric: Fabric, solver: str, segments: int) -> tuple[flo
     """The overhang [m] at which the chord reaches 41.5 degrees (interpolated between the
     overhangs tried), and the tried overhang nearest it [m] with its strip's centre line as
     (x, z) from the ledge's edge [m]."""
-    fabric = fabric.with_(bending_hysteresis=0.0) if hasattr(fabric, "bending_hysteresis") else fabric
+    fabric = fabric.with_(bending_hysteresis=0.0)
     guess = 2.0 * reference_bending_length(fabric)
     tried = {o: overhang_shape(fabric, solver, o, segments) for o in (0.85 * guess, 1.15 * guess)}
 

@@ -123,8 +123,7 @@ def measured_fabrics() -> list[tuple[Fabric, float, int]]:
                 areal_density=areal_density_from_mg_per_cm2(float(row["W_mg_per_cm2"])),
                 thickness=float(row["T_mm"]) * 1e-3 if float(row["T_mm"]) > 0 else base.thickness,
                 tensile_warp=300.0, tensile_weft=300.0, bending_rigidity=b, shear=20.0 * b / 1e-4,
-                **({"bending_hysteresis": bending_hysteresis_from_kes(float(row["twoHB_gf_cm_per_cm"]))}
-                   if "bending_hysteresis" in Fabric.__dataclass_fields__ else {}))
+                bending_hysteresis=bending_hysteresis_from_kes(float(row["twoHB_gf_cm_per_cm"])))
             out.append((fabric, float(row["DC_percent"]), int(row["nodes"])))
     return out
 
