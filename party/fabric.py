@@ -40,8 +40,8 @@ class Fabric:
         shear: In-plane shear stiffness G [N/m per radian of shear angle], carried by the
             net's diagonal elements (0: none, as in the paper).
         bending_rigidity: Bending rigidity B [N*m]: moment per unit width per unit curvature,
-            carried by dihedral hinges on the triangles' interior edges (0: none, as in the
-            paper).
+            carried by curvature stencils along the threads and twist stencils on the grid's
+            quads (:mod:`party.meshing.hinges`; 0: none, as in the paper).
         bending_hysteresis: Kawabata's bending hysteresis 2HB [N*m/m]: the width of the
             moment-curvature loop. Bending then meets a frictional moment of up to HB = 2HB / 2
             per unit width, which holds the cloth in any shape where it is not exceeded (a

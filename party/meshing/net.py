@@ -3,8 +3,8 @@
 A :class:`ClothNet` holds nodes in the flat pattern plane (metres, warp along +u), the
 elements joining them and the triangles used for collision and rendering. Element kinds:
 warp and weft (the paper's 4-neighbour net), and shear diagonals that carry a fabric's shear
-stiffness (dropped for fabrics without one, such as the paper's). Bending lives on the
-triangles' interior edges (:func:`party.meshing.hinges.hinges`).
+stiffness (dropped for fabrics without one, such as the paper's). Bending lives on stencils
+along the threads and on the grid's quads (:func:`party.meshing.hinges.hinges`).
 """
 
 from __future__ import annotations
