@@ -24,6 +24,7 @@ from __future__ import annotations
 import warp as wp
 
 from ..model import Model, State
+from .explicit.kernels import stencil_curvature
 
 
 @wp.func
@@ -37,11 +38,6 @@ def stencil_frame(x: wp.array(dtype=wp.vec3), n: wp.vec4i) -> wp.mat33:
     t = wp.normalize(along)
     nn = wp.normalize(normal)
     return wp.matrix_from_rows(t, nn, wp.cross(nn, t))
-
-
-@wp.func
-def curvature(x: wp.array(dtype=wp.vec3), n: wp.vec4i, w: wp.vec4) -> wp.vec3:
-    return w[0] * x[n[0]] + w[1] * x[n[1]] + w[2] * x[n[2]] + w[3] * x[n[3]]
 
 
 @wp.kernel
@@ -85,7 +81,7 @@ def update_slip(
     n = hinge_nodes[h]
     frame = stencil_frame(x, n)
     c_slip = wp.transpose(frame) * slip_in[h]
-    stretch = curvature(x, n, hinge_weights[h]) - c_slip
+    stretch = stencil_curvature(x, n, hinge_weights[h]) - c_slip
     force = s * wp.length(stretch)
     limit = hinge_slip_limit[h]
     if force > limit:

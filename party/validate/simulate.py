@@ -99,23 +99,3 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = B
             if quiet >= 2:
                 return state, it
     raise SimulationUnstable(f"the {solver} solver did not come to rest in {max_seconds} s")
-
-
-def static_residual(model: Model, points: np.ndarray, bending=None) -> float:
-    """Largest net force of springs, bending hinges and gravity on a free node, over its
-    weight [-]: zero at static equilibrium."""
-    h = model.host
-    e, params = h["elements"], h["element_params"]
-    span = points[e[:, 1]] - points[e[:, 0]]
-    length = np.maximum(np.linalg.norm(span, axis=1), 1e-30)
-    pull = (params[:, 1] * (length - params[:, 0]) / length)[:, None] * span
-    force = np.zeros_like(points)
-    np.add.at(force, e[:, 0], pull)
-    np.add.at(force, e[:, 1], -pull)
-    if model.hinge_count:
-        force -= (model.bending_matrix() if bending is None else bending) @ points
-    gravity = np.array([model.gravity[0], model.gravity[1], model.gravity[2]], float)
-    weight = h["mass"] * np.linalg.norm(gravity)
-    force += h["mass"][:, None] * gravity
-    free = ~h["kinematic"]
-    return float(np.max(np.linalg.norm(force[free], axis=1) / weight[free])) if free.any() else 0.0

@@ -140,6 +140,12 @@ def advance_positions(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt
     x[i] = x[i] + v[i] * dt
 
 
+@wp.func
+def stencil_curvature(x: wp.array(dtype=wp.vec3), n: wp.vec4i, w: wp.vec4) -> wp.vec3:
+    """A bending stencil's curvature vector k = sum_i K_i x_i (:mod:`party.meshing.hinges`)."""
+    return w[0] * x[n[0]] + w[1] * x[n[1]] + w[2] * x[n[2]] + w[3] * x[n[3]]
+
+
 @wp.kernel
 def hinge_forces(
     x: wp.array(dtype=wp.vec3),
@@ -153,7 +159,7 @@ def hinge_forces(
     h = wp.tid()
     n = hinge_nodes[h]
     w = hinge_weights[h]
-    k = w[0] * x[n[0]] + w[1] * x[n[1]] + w[2] * x[n[2]] + w[3] * x[n[3]]
+    k = stencil_curvature(x, n, w)
     s = hinge_stiffness[h]
     for c in range(4):
         wp.atomic_add(f, n[c], -s * w[c] * k)
