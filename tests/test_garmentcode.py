@@ -35,28 +35,46 @@ def test_sample_loads_meshes_and_pairs_its_seams(path):
     assert all(p.placement.translation[1] < 0 for p in fronts)
 
 
-@pytest.fixture(scope="module")
-def pencil_drape(tmp_path_factory):
+SPACING_MM = "30"  # coarse, for CI: every sample drapes in under about two minutes
+
+
+def _drape(path: Path, out: Path, images: bool) -> dict:
+    import json
     import subprocess
     import sys
 
-    out = tmp_path_factory.mktemp("pencil") / "out"
-    run = subprocess.run([sys.executable, "-m", "party.cli", "drape", str(DATA / "patterns" / "dress_pencil_specification.json"),
-                          "--body", str(DATA / "bodies" / "mean_all.obj"), "--spacing-mm", "30", "--out", str(out),
-                          "--no-progress"], capture_output=True, text=True, timeout=900)
+    run = subprocess.run([sys.executable, "-m", "party.cli", "drape", str(path), "--body", str(DATA / "bodies" / "mean_all.obj"),
+                          "--spacing-mm", SPACING_MM, "--out", str(out), "--no-progress"]
+                         + ([] if images else ["--no-images"]), capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr
-    import json
-
-    return out, json.loads((out / "summary.json").read_text())
+    return json.loads((out / "summary.json").read_text())
 
 
-def test_pencil_dress_drapes_on_mean_all_with_closed_seams(pencil_drape):
+@pytest.fixture(scope="module")
+def pencil_drape(tmp_path_factory):
+    out = tmp_path_factory.mktemp("pencil") / "out"
+    return out, _drape(DATA / "patterns" / "dress_pencil_specification.json", out, images=True)
+
+
+@pytest.mark.parametrize("path", [p for p in SAMPLES if "pencil" not in p.name],
+                         ids=lambda p: p.name.removesuffix("_specification.json"))
+def test_sample_drapes_on_mean_all_closed_and_clean(path, tmp_path):
+    summary = _drape(path, tmp_path / "out", images=False)
+    _assert_closed_and_clean(summary)
+
+
+def test_pencil_dress_drapes_on_mean_all_closed_and_clean(pencil_drape):
     _, summary = pencil_drape
-    assert summary["max_seam_gap_mm"] < 2.0
-    # Issue 3 asks for none; a few nodes (3 of 1,301 when last measured) end up to 15 mm inside
-    # where the hanging arm meets the hip and pinches the cloth. This bound catches any worse.
-    assert summary["body_penetrations"] <= 0.005 * summary["nodes"]
+    _assert_closed_and_clean(summary)
     assert summary["panels"] == 6 and summary["seams"] == 23
+
+
+def _assert_closed_and_clean(summary: dict) -> None:
+    """Issue 3's bar for every sample: seams closed to under 2 mm, no node inside the body and
+    no cloth edge through a cloth triangle."""
+    assert summary["max_seam_gap_mm"] < 2.0
+    assert summary["body_penetrations"] == 0
+    assert summary["cloth_crossings"] == 0
 
 
 def test_drape_outputs_are_in_the_bodys_frame_with_uvs(pencil_drape):

@@ -36,7 +36,7 @@ class CollisionSettings:
         exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
             (the node may not fold through its neighbours' triangles, which keeps sharp folds
             of a coarse net from crossing themselves); 1, also those holding one of its mesh
-            neighbours (needed while sewing, where a node must reach its partner's triangles).
+            neighbours.
     """
 
     body: bool = True

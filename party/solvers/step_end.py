@@ -9,7 +9,7 @@ import warp as wp
 from ..collision import CollisionPipeline, CollisionSettings
 from ..collision.crossing_guard import CrossingGuard
 from ..model import Model, State
-from .explicit.kernels import advance_positions, count_over_limit, plastic_limit
+from .explicit.kernels import advance_positions, cap_speed, count_over_limit, plastic_limit
 from .hysteresis import BendingHysteresis
 
 PLASTIC_TOLERANCE = 5.0e-5
@@ -35,11 +35,17 @@ class StepEnd:
             correction along the body normal) may undo a limit correction of a node in contact;
             at the paper's dt the loss is negligible, but over a large step it lets cloth in
             contact stretch step after step (seen: 27 % beyond rest in 30 steps of 1/300 s).
+        max_speed: Static relaxation's speed cap [m/s], applied to the plastic limit's
+            velocities as well, so that no node moves farther than ``max_speed * dt`` in one
+            iteration and Collision() sees every step. (Seams merged after sewing left some
+            elements at four times their length; the limit moved their nodes 150 mm in one
+            step, beyond the collision search, and 36 of them ended inside the shoulders.)
     """
 
     def __init__(self, model: Model, collision: CollisionSettings | None, plastic_passes: int,
-                 limit_after_contact: bool = False) -> None:
+                 limit_after_contact: bool = False, max_speed: float | None = None) -> None:
         self.model = model
+        self.max_speed = max_speed
         self.collision = CollisionPipeline(model, collision) if collision is not None else None
         self.plastic_passes = plastic_passes
         self._over_limit = wp.zeros(1, dtype=int, device=model.device)
@@ -75,7 +81,8 @@ class StepEnd:
     def _apply_plastic_limit(self, state: State, dt: float) -> None:
         """Gauss-Seidel sweeps over the element colours until no element would end the step
         beyond its limit (to :data:`PLASTIC_TOLERANCE`), at most ``plastic_passes`` sweeps. Reads one
-        counter from the device per sweep; no sweep runs while the net is within its limits."""
+        counter from the device per sweep; no sweep runs while the net is within its limits. Caps
+        the speeds at ``max_speed`` after, where one is set."""
         m = self.model
         offsets = m.element_color_offsets
         for _ in range(self.plastic_passes):
@@ -84,9 +91,11 @@ class StepEnd:
                       inputs=[m.element_colored, state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes, m.element_max_length,
                               dt, PLASTIC_TOLERANCE, self._over_limit], device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
-                return
+                break
             for c in range(len(offsets) - 1):
                 wp.launch(plastic_limit, dim=offsets[c + 1] - offsets[c],
                           inputs=[m.element_colored, offsets[c], state.node_q, state.node_qd,
                                   m.node_inv_mass, m.element_nodes, m.element_max_length, dt], device=m.device)
+        if self.max_speed is not None:
+            wp.launch(cap_speed, dim=m.node_count, inputs=[state.node_qd, float(self.max_speed)], device=m.device)
 

@@ -68,6 +68,15 @@ def kinetic_damping(v_before: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3
     v[i] = vi * keep
 
 
+@wp.kernel
+def cap_speed(v: wp.array(dtype=wp.vec3), max_speed: float):
+    """Scale every velocity down to at most ``max_speed`` [m/s]."""
+    i = wp.tid()
+    speed = wp.length(v[i])
+    if speed > max_speed:
+        v[i] = v[i] * (max_speed / speed)
+
+
 @wp.func
 def end_of_step_span(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), i: int, k: int, dt: float) -> wp.vec3:
     """(r_k + v_k dt) - (r_i + v_i dt): the element's vector at the end of the step [m]."""

@@ -42,7 +42,8 @@ class SolverExplicit:
                                "solver only; use --solver implicit")
         self.model = model
         self.kinetic_damping = kinetic_damping
-        self.end = StepEnd(model, collision, plastic_passes)
+        self.end = StepEnd(model, collision, plastic_passes,
+                           max_speed=kinetic_damping[0] if kinetic_damping is not None else None)
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         self._f_ext = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)

@@ -57,7 +57,8 @@ class SolverImplicit:
         self.iterations = int(iterations)
         if collision is not None:
             collision = replace(collision, broad_phase="bvh")
-        self.end = StepEnd(model, collision, plastic_passes, limit_after_contact=True)
+        self.end = StepEnd(model, collision, plastic_passes, limit_after_contact=True,
+                           max_speed=kinetic_damping[0] if kinetic_damping is not None else None)
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         dev = model.device
