@@ -14,7 +14,7 @@ fewer iterations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -70,8 +70,9 @@ class SolverRelax:
         damping = (max_speed, 1.0 if momentum == 0.0 else momentum)
         if solver == "explicit":
             self.stepper = SolverExplicit(model, collision=collision, kinetic_damping=damping)
-        else:
-            self.stepper = SolverImplicit(model, collision=collision, kinetic_damping=damping)
+        else:  # with the crossing guard, as make_solver gives it: large steps slip through more
+            guarded = replace(collision, crossing_guard=True) if collision is not None else None
+            self.stepper = SolverImplicit(model, collision=guarded, kinetic_damping=damping)
 
     def iterate(self, state: State, scratch: State, control: Control, dt: float) -> None:
         """One iteration from ``state`` into ``scratch`` (swap after)."""
