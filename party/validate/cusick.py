@@ -7,9 +7,11 @@ hangs in folds around it. Seen from above, its shadow gives the drape coefficien
 
 (1: no drape at all, 0: hangs straight down) and the number of nodes (folds) round its edge.
 Case 6 reports both for every fabric in the library with a top view of each; case 7 drapes
-three fabrics whose Kawabata bending, weight and Cusick drape were measured
-(``../shared/data/fabrics/cusick_matsudaira2015.csv``) and holds the simulation to within
-8 DC points and 1 node of the measurement.
+three fabrics whose Kawabata bending, weight and drape were measured
+(``../shared/data/fabrics/cusick_matsudaira2015.csv``) on the instrument they were measured
+with (:data:`MATSUDAIRA`: our reading of Matsudaira's published drape work, not checked
+against the 2015 paper) and holds the simulation to within 8 DC points and 1 node of the
+measurement.
 """
 
 from __future__ import annotations
