@@ -118,9 +118,9 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
         state = closing.state()
         steps = max(max_iterations // 4, 200)
         with relax_progress("closing seams", steps, progress) as on_log:
+            # the same masses and stiffnesses as the sewing model (only the seams' limit is new): same dt
             closed = SolverRelax(closing, collision=CollisionSettings(cloth=False), max_speed=1.0).relax(
-                state, relax_time_step(closing, "explicit"), max_iterations=steps, min_iterations=min(100, steps),
-                on_log=on_log)
+                state, dt, max_iterations=steps, min_iterations=min(100, steps), on_log=on_log)
         result.iterations += closed.iterations
     points = _finite(state.positions())
     sp = garment.seam_pairs

@@ -152,9 +152,8 @@ def measured_fabrics() -> list[tuple[Fabric, float, int]]:
 
 def specimen_panel(radius: float) -> Panel:
     """The specimen disc of ``radius`` [m] as four quarter arcs, warp along x."""
-    r = radius
-    corners = [(r, 0.0), (0.0, r), (-r, 0.0), (0.0, -r)]
-    edges = tuple(arc_through_radius(corners[k], corners[(k + 1) % 4], r, large_arc=False, ccw=True)
+    corners = [(radius, 0.0), (0.0, radius), (-radius, 0.0), (0.0, -radius)]
+    edges = tuple(arc_through_radius(corners[k], corners[(k + 1) % 4], radius, large_arc=False, ccw=True)
                   for k in range(4))
     return Panel("specimen", edges, np.array([1.0, 0.0]))
 
