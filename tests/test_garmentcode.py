@@ -63,9 +63,11 @@ def test_sample_drapes_on_mean_all_closed_and_clean(path, tmp_path):
     _assert_closed_and_clean(summary)
 
 
-def test_flare_dress_drapes_closed_and_clean_with_the_implicit_solver(tmp_path):
-    # draping in 1/300 s steps needs the crossing guard (21 crossings without it, seen)
-    summary = _drape(DATA / "patterns" / "dress_sleeves_flare_specification.json", tmp_path / "out", images=False,
+@pytest.mark.parametrize("name", ["dress_sleeves_flare", "hoody_mean"])
+def test_sample_drapes_closed_and_clean_with_the_implicit_solver(name, tmp_path):
+    # draping in 1/300 s steps needs the crossing guard (the flare dress: 21 crossings without
+    # it), checking every edge (the hoody: 2 crossings when only edges near cloth were checked)
+    summary = _drape(DATA / "patterns" / f"{name}_specification.json", tmp_path / "out", images=False,
                      solver="implicit")
     _assert_closed_and_clean(summary)
 

@@ -36,14 +36,35 @@ def test_small_hysteresis_slips_and_bends_nearly_as_far():
     assert 0.9 * free < slipping < free
 
 
-def test_hysteresis_needs_bending_rigidity():
-    with pytest.raises(InvalidInput, match="^fabric 'x': bending_hysteresis needs a bending_rigidity"):
-        COTTON.with_(name="x", bending_rigidity=0.0, bending_hysteresis=1e-4)
-
-
 def test_implicit_solver_refuses_hysteresis():
     net = rectangular_net(0.05, 0.05, 0.01)
     b = ModelBuilder()
     b.add_cloth(net, COTTON.with_(bending_hysteresis=1e-4), np.c_[net.uv, np.zeros(net.node_count)])
     with pytest.raises(InvalidInput, match="^bending hysteresis .* explicit solver only; use --solver explicit$"):
         SolverImplicit(b.finalize("cpu"))
+
+
+def test_hysteresis_needs_bending_rigidity():
+    with pytest.raises(InvalidInput, match="^fabric 'x': bending_hysteresis needs a bending_rigidity"):
+        COTTON.with_(name="x", bending_rigidity=0.0, bending_hysteresis=1e-4)
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 45.0, 90.0])
+def test_frictional_moment_is_hb_whatever_the_direction_of_bending(angle):
+    """Bending a sheet further along a cylinder by d(kappa) does work HB d(kappa) per unit
+    area against the sliders, along the grain and along the bias alike: summed over the
+    stencils that carry a slider, limit * |curvature| is HB * area * kappa."""
+    from test_bending_shear import cylinder
+
+    net = rectangular_net(0.4, 0.4, 0.005)
+    b = ModelBuilder()
+    two_hb = 2e-4
+    b.add_cloth(net, COTTON.with_(bending_hysteresis=two_hb), np.c_[net.uv, np.zeros(net.node_count)])
+    model = b.finalize("cpu")
+    radius = 0.3
+    points = cylinder(net, radius, angle)
+    nodes, weights = model.hinge_nodes.numpy(), model.hinge_weights.numpy()
+    curvature = np.linalg.norm(np.einsum("hk,hkc->hc", weights, points[nodes]), axis=1)
+    sliding = model.hinge_friction.numpy() > 0
+    work = np.sum(model.hinge_slip_limit.numpy()[sliding] * curvature[sliding])
+    assert work == pytest.approx(0.5 * two_hb * 0.16 / radius, rel=0.03)

@@ -49,3 +49,29 @@ def test_both_sides_of_a_seam_get_the_same_node_count():
         assert len(a) - 1 == round(pattern.edge(EdgeRef("long", edge)).length() / 0.02)
     net, node_map = g.sewn()
     assert net.node_count == g.node_count - len(g.seam_pairs)
+
+
+def test_thread_ends_put_free_edge_nodes_where_threads_cross_so_bending_reaches_the_edge():
+    """With ``thread_ends`` every node along a free edge (bar the edges' corners) lies on a
+    thread of the grid, so threads run straight to the edge and the last grid node before it
+    carries a bending stencil: under half as many inner nodes lack one as with even spacing."""
+    from party.meshing.hinges import hinges
+    from party.validate.cusick import specimen_panel
+
+    def lacking(mesh):
+        nodes, weights, _ = hinges(mesh.net)
+        centres = np.bincount(nodes[weights[:, 3] == 0, 1], minlength=mesh.net.node_count)
+        ring = np.zeros(mesh.net.node_count, bool)
+        ring[np.concatenate(mesh.edge_nodes)] = True
+        return np.sum((centres < 2) & ~ring)
+
+    spacing = 0.0075
+    even = mesh_panel(specimen_panel(0.127), spacing)
+    ends = mesh_panel(specimen_panel(0.127), spacing, thread_ends=True)
+    grid = ends.net.uv[len(np.concatenate([e[:-1] for e in ends.edge_nodes])):]
+    offset = grid[0]
+    for edge in ends.edge_nodes:
+        phase = (ends.net.uv[edge[1:-1]] - offset) / spacing
+        assert np.all(np.min(np.abs(phase - np.round(phase)), axis=1) < 1e-9)
+    assert lacking(ends) < 0.5 * lacking(even)
+    assert ends.net.rest_triangle_areas().sum() == pytest.approx(np.pi * 0.127**2, rel=0.01)

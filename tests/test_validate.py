@@ -131,3 +131,16 @@ def test_catenary_deviation_shrinks_with_the_spacing():
     catenary."""
     deviations = [catenary.strip_deviation(COTTON, "explicit", spacing) for spacing in (0.04, 0.02, 0.01)]
     assert deviations[0] > deviations[1] > deviations[2]
+
+
+def test_cusick_specimens_are_laid_flat_on_the_pedestal_and_wavy_beyond_it():
+    """The waviness is zero on the pedestal, about WAVINESS (rms) at the edge, the same field at
+    every mesh resolution, and different for each specimen (seed)."""
+    meter = cusick.MATSUDAIRA
+    angle = np.linspace(-math.pi, math.pi, 720, endpoint=False)
+    edge = meter.specimen_radius * np.c_[np.cos(angle), np.sin(angle)]
+    inner = 0.99 * meter.pedestal_radius * np.c_[np.cos(angle), np.sin(angle)]
+    rms = [np.sqrt(np.mean(cusick.waviness(edge, meter, seed) ** 2)) for seed in range(8)]
+    assert np.all(cusick.waviness(inner, meter, 0) == 0.0)
+    assert 0.6 * cusick.WAVINESS < np.sqrt(np.mean(np.square(rms))) < 1.4 * cusick.WAVINESS
+    assert not np.allclose(cusick.waviness(edge, meter, 0), cusick.waviness(edge, meter, 1))

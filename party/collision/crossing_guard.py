@@ -3,9 +3,11 @@
 The paper's cloth-cloth detection (section 6.3) tests each node against triangles along its
 step; two edges can still pass through each other between nodes, more so over a large step.
 After a step, the guard looks for mesh edges that pass through a triangle (sharing no node)
-at the end of the step but did not at its start (among the edges with a node near another
-layer: one whose collision search found cloth triangles along its step), and sends the nodes of each such pair back
-to where the step began, at rest. It repeats until no new crossing is left: at worst every
+at the end of the step but did not at its start, and sends the nodes of each such pair back
+to where the step began, at rest. It checks every edge: checking only edges with a node whose
+collision search had found cloth triangles along its step saved some 15 % of a self-colliding
+step, but let an edge longer than the search's reach pass through a triangle unseen
+(GarmentCode's hoody draped with the implicit solver: 2 crossings). It repeats until no new crossing is left: at worst every
 node is back at its start, which had none, so no step ever creates a crossing. Crossings
 present before a step (from a set-up) are left alone and not counted as new.
 """
@@ -26,14 +28,12 @@ more than a few only when many layers pile up at once."""
 
 @wp.kernel
 def _check_edges(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
-                 edges: wp.array(dtype=wp.vec2i), near: wp.array(dtype=int), crossed_before: wp.array(dtype=int),
+                 edges: wp.array(dtype=wp.vec2i), crossed_before: wp.array(dtype=int),
                  crossed_now: wp.array(dtype=int), revert: wp.array(dtype=int), new_count: wp.array(dtype=int)):
     e = wp.tid()
     i = edges[e][0]
     k = edges[e][1]
     crossed_now[e] = 0
-    if near[i] == 0 and near[k] == 0 and crossed_before[e] == 0:
-        return
     query = wp.mesh_query_aabb(mesh, wp.min(points[i], points[k]), wp.max(points[i], points[k]))
     t = int(0)
     while wp.mesh_query_aabb_next(query, t):
@@ -78,22 +78,16 @@ class CrossingGuard:
         self.new_count = wp.zeros(1, dtype=int, device=dev)
         self.reverts = 0
         self._primed = False
-        self._near = wp.ones(model.node_count, dtype=int, device=dev)
 
     def prime(self, x: wp.array) -> None:
         """Record which edges cross at ``x`` (the state before the first step)."""
-        near, self._near = self._near, wp.ones(self.model.node_count, dtype=int, device=self.model.device)
         self._check(x)
-        self._near = near
         wp.copy(self.crossed_before, self.crossed_now)
         self._primed = True
 
-    def apply(self, x_start: wp.array, x: wp.array, v: wp.array, near: wp.array) -> int:
+    def apply(self, x_start: wp.array, x: wp.array, v: wp.array) -> int:
         """Revert nodes of new crossings at the end of a step (``x``, ``v`` in place) to
-        ``x_start`` at rest; returns the number of nodes reverted (syncs with the device).
-        Only edges with a node ``near`` another layer (non-zero: the node's cloth-collision
-        search found triangles along its step) are checked."""
-        self._near = near
+        ``x_start`` at rest; returns the number of nodes reverted (syncs with the device)."""
         if not self._primed:
             self.prime(x_start)
         m = self.model
@@ -116,6 +110,6 @@ class CrossingGuard:
         self.mesh.refit()
         self.new_count.zero_()
         wp.launch(_check_edges, dim=self.edge_count,
-                  inputs=[self.mesh.id, self.points, m.triangle_nodes, self.edges, self._near, self.crossed_before,
+                  inputs=[self.mesh.id, self.points, m.triangle_nodes, self.edges, self.crossed_before,
                           self.crossed_now, self.revert, self.new_count], device=m.device)
         return int(self.new_count.numpy()[0])

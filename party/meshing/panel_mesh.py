@@ -8,6 +8,12 @@ is joined by a Delaunay triangulation clipped to the outline, and each triangle 
 element: grid sides are warp or weft, grid diagonals shear, and sides at other angles near the
 outline take the warp and weft stiffness in proportion to cos^2 and sin^2 of their angle to the
 grain.
+
+With ``thread_ends``, edges not seamed get their nodes where the grid's threads cross them
+instead: every thread then runs straight to the outline, so bending stencils
+(:mod:`party.meshing.hinges`) reach the last grid node before a free edge, and the fringe along
+the edge is not left without bending stiffness (a drape specimen's overhang is short enough for
+that fringe to matter).
 """
 
 from __future__ import annotations
@@ -57,22 +63,29 @@ def segments_for(length: float, spacing: float) -> int:
     return max(int(round(length / spacing)), 1)
 
 
-def mesh_panel(panel: Panel, spacing: float, segments: dict[int, int] | None = None) -> PanelMesh:
+def mesh_panel(panel: Panel, spacing: float, segments: dict[int, int] | None = None, *,
+               thread_ends: bool = False) -> PanelMesh:
     """Mesh ``panel`` at node ``spacing`` [m]; ``segments`` fixes the segment count of some
-    edges (seamed edges), the others get :func:`segments_for`."""
+    edges (seamed edges), the others get :func:`segments_for`, or with ``thread_ends`` a node
+    wherever a grid thread crosses them."""
     if not (np.isfinite(spacing) and spacing > 0):
         raise InvalidInput(f"mesh spacing must be positive, got {spacing}")
     segments = segments or {}
     grain = np.asarray(panel.grain, float) / np.hypot(*panel.grain)
     to_grain = np.array([[grain[0], grain[1]], [-grain[1], grain[0]]])  # rows: warp, weft
 
+    if thread_ends:
+        dense = np.concatenate([e.sample(max(64 * segments_for(e.length(), spacing), 64)) for e in panel.edges])
+        lo, hi = _grid_frame(dense @ to_grain.T, spacing, panel.name)[:2]
     ring, edge_nodes = [], []
     for k, edge in enumerate(panel.edges):
-        n = segments.get(k) or segments_for(edge.length(), spacing)
-        pts = edge.sample(n)
+        if thread_ends and k not in segments:
+            pts = _thread_crossings(edge, to_grain, lo, hi, spacing)
+        else:
+            pts = edge.sample(segments.get(k) or segments_for(edge.length(), spacing))
         start = len(ring)
         ring.extend(pts[:-1])
-        edge_nodes.append(np.arange(start, start + n + 1))
+        edge_nodes.append(np.arange(start, start + len(pts)))
     count = len(ring)
     edge_nodes = tuple(np.where(ids == count, 0, ids) for ids in edge_nodes)
     ring = np.asarray(ring)
@@ -82,11 +95,9 @@ def mesh_panel(panel: Panel, spacing: float, segments: dict[int, int] | None = N
                            "use a finer spacing")
 
     ring_g = ring @ to_grain.T
-    lo, hi = ring_g.min(axis=0), ring_g.max(axis=0)
-    nu, nv = (np.floor((hi - lo) / spacing).astype(int) + 1)
-    if nu * nv > MAX_NODES_PER_PANEL:
-        raise InvalidInput(f"panel {panel.name!r}: {nu * nv} grid nodes at {spacing * 1000:.1f} mm spacing is too many")
-    offset = lo + 0.5 * ((hi - lo) - (np.array([nu, nv]) - 1) * spacing)
+    if not thread_ends:
+        lo, hi = ring_g.min(axis=0), ring_g.max(axis=0)
+    lo, hi, nu, nv, offset = _grid_frame(np.array([lo, hi]), spacing, panel.name)
     gu, gv = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
     grid_g = offset + spacing * np.stack([gu.ravel(), gv.ravel()], axis=1)
     grid_xy = grid_g @ to_grain  # back to the panel frame
@@ -104,6 +115,46 @@ def mesh_panel(panel: Panel, spacing: float, segments: dict[int, int] | None = N
     net = ClothNet(uv=uv, elements=elements, kinds=kinds, widths=widths, triangles=triangles,
                    shape=(0, 0), warp_share=share)
     return PanelMesh(panel, net, xy, edge_nodes, _quality(uv, triangles, elements, kinds, is_grid, ij, spacing))
+
+
+def _grid_frame(points_g: np.ndarray, spacing: float, name: str):
+    """The grid over ``points_g`` (grain frame) [m]: its bounding box, node counts along warp
+    and weft, and the first node, centred in the box."""
+    lo, hi = points_g.min(axis=0), points_g.max(axis=0)
+    nu, nv = (np.floor((hi - lo) / spacing).astype(int) + 1)
+    if nu * nv > MAX_NODES_PER_PANEL:
+        raise InvalidInput(f"panel {name!r}: {nu * nv} grid nodes at {spacing * 1000:.1f} mm spacing is too many")
+    offset = lo + 0.5 * ((hi - lo) - (np.array([nu, nv]) - 1) * spacing)
+    return lo, hi, nu, nv, offset
+
+
+THREAD_END_GAP = 0.5
+"""Thread crossings of an edge closer than this many spacings to a kept one are dropped."""
+
+
+def _thread_crossings(edge, to_grain: np.ndarray, lo: np.ndarray, hi: np.ndarray, spacing: float) -> np.ndarray:
+    """Points along ``edge`` (panel frame) [m] from its start to its end where it crosses a
+    grid thread, the crossing's coordinate across the thread set exactly to the thread's."""
+    offset = _grid_frame(np.array([lo, hi]), spacing, "")[4]
+    dense = edge.sample(max(64 * segments_for(edge.length(), spacing), 64))
+    g = dense @ to_grain.T
+    found = [(0.0, g[0])]
+    arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(dense, axis=0), axis=1))]
+    for axis in (0, 1):
+        index = (g[:, axis] - offset[axis]) / spacing
+        for s in np.flatnonzero(np.floor(index[:-1]) != np.floor(index[1:])):
+            line = float(max(np.floor(index[s]), np.floor(index[s + 1])))
+            t = (line - index[s]) / (index[s + 1] - index[s])
+            point = g[s] + t * (g[s + 1] - g[s])
+            point[axis] = offset[axis] + line * spacing
+            found.append((arc[s] + t * (arc[s + 1] - arc[s]), point))
+    found.sort(key=lambda item: item[0])
+    kept = [found[0]]
+    for position, point in found[1:]:
+        if position - kept[-1][0] >= THREAD_END_GAP * spacing and arc[-1] - position >= THREAD_END_GAP * spacing:
+            kept.append((position, point))
+    points = np.array([p for _, p in kept] + [g[-1]])
+    return points @ to_grain
 
 
 def _clipped_delaunay(xy: np.ndarray, outline: shapely.Polygon, ring_count: int, name: str) -> np.ndarray:

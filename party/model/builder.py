@@ -138,7 +138,12 @@ class ModelBuilder:
         self._membranes.append(_membrane(net, fabric))
         if fabric.bending_rigidity > 0.0:
             nodes, weights, scale = hinges(net)
-            friction = HYSTERESIS_STIFFNESS * fabric.bending_rigidity * scale if fabric.bending_hysteresis > 0 else 0 * scale
+            # Thread stencils only (a twist stencil's fourth weight is not 0): summed over the
+            # two threads, the frictional moment on a cylinder of any direction is then HB, as
+            # |cos^2| + |sin^2| = 1; twist stencils with it too would double it on the bias.
+            thread = weights[:, 3] == 0.0
+            friction = np.where(thread & (fabric.bending_hysteresis > 0),
+                                HYSTERESIS_STIFFNESS * fabric.bending_rigidity * scale, 0.0)
             self._hinges.append((nodes + node_start, weights, fabric.bending_rigidity * scale, friction,
                                  0.5 * fabric.bending_hysteresis * scale))
         cloth = ClothRange(name, node_start, self._node_count, tri_start, self._triangle_count, net)

@@ -1,6 +1,7 @@
-"""Bending hysteresis (Kawabata's 2HB): a Jenkins element beside each bending stencil.
+"""Bending hysteresis (Kawabata's 2HB): a Jenkins element beside each thread's bending stencil.
 
-Beside its bending stiffness k, each stencil (:mod:`party.meshing.hinges`) carries a spring
+Beside its bending stiffness k, each thread stencil (:mod:`party.meshing.hinges`; not the
+twist stencils, so that the frictional moment is HB whichever way the cloth bends) carries a spring
 of stiffness ``Model.hinge_friction`` = f k in series with a slider: energy
 f k |c - c_slip|^2 / 2 with c the stencil's curvature vector. While |f k (c - c_slip)| stays
 below ``Model.hinge_slip_limit`` (HB times the stencil's area) the element sticks; beyond, it

@@ -71,7 +71,7 @@ class StepEnd:
             self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, search=False)
         wp.launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
         if self.guard is not None:
-            self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd, self.collision.cloth_candidate_count)
+            self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd)
         if self._moving_colliders:
             wp.launch(advance_positions, dim=len(state_out.collider_q),
                       inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
