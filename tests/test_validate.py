@@ -85,6 +85,12 @@ def test_cusick_longer_bending_length_drapes_less():
     assert cotton.nodes >= 3 and jersey.nodes >= 3
 
 
+def test_cusick_leaves_out_a_fabric_without_bending_and_says_so():
+    result = cusick.run_case(fabric_by_name("wool_flannel"), "explicit", quick=True)
+    assert result.checks == []
+    assert result.details["skipped"] == "no bending rigidity, no drape to measure: wool_flannel"
+
+
 def test_fold_count_of_a_known_outline():
     angle = np.linspace(-math.pi, math.pi, 400, endpoint=False)
     outline = np.stack([angle, 0.12 + 0.02 * np.cos(6 * angle)], axis=1)
