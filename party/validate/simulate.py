@@ -71,11 +71,12 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = B
     critically). The model is at rest when, over two checks ``check_every`` [s] apart, no
     node moved faster than ``rest_speed`` [m/s] on average. (The net force on a node is no
     criterion: in stiff cloth the round-off of single-precision positions already leaves a
-    few percent of a small node's weight.) Where the case measures one quantity,
-    ``steady(before, after)`` may judge two checks' positions [m] instead: the model is then
-    also at rest when that quantity has stopped changing, as a laboratory reads a drape once
-    its shadow is steady, though a limp cloth's folds may go on creeping for minutes. Kinetic damping, which stops each node where its
-    velocity turns, was tried and let a finely meshed strip jitter at its speed cap.)"""
+    few percent of a small node's weight. Kinetic damping, which stops each node where its
+    velocity turns, was tried and let a finely meshed strip jitter at its speed cap.) Where the
+    case measures one quantity, ``steady(before, after)`` may judge two checks' positions [m]
+    as well: the model is then also at rest when that quantity has stopped changing, as a
+    laboratory reads a drape once its shadow is steady, though a limp cloth's folds may go on
+    creeping for minutes."""
     dt = dynamics_time_step(model, solver)
     stepper = make_solver(solver, model, collision=collision)
     keep = math.exp(-dt / memory)
