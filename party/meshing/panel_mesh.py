@@ -76,11 +76,11 @@ def mesh_panel(panel: Panel, spacing: float, segments: dict[int, int] | None = N
 
     if thread_ends:
         dense = np.concatenate([e.sample(max(64 * segments_for(e.length(), spacing), 64)) for e in panel.edges])
-        lo, hi = _grid_frame(dense @ to_grain.T, spacing, panel.name)[:2]
+        lo, hi, _, _, offset = _grid_frame(dense @ to_grain.T, spacing, panel.name)
     ring, edge_nodes = [], []
     for k, edge in enumerate(panel.edges):
         if thread_ends and k not in segments:
-            pts = _thread_crossings(edge, to_grain, lo, hi, spacing)
+            pts = _thread_crossings(edge, to_grain, offset, spacing)
         else:
             pts = edge.sample(segments.get(k) or segments_for(edge.length(), spacing))
         start = len(ring)
@@ -132,10 +132,10 @@ THREAD_END_GAP = 0.5
 """Thread crossings of an edge closer than this many spacings to a kept one are dropped."""
 
 
-def _thread_crossings(edge, to_grain: np.ndarray, lo: np.ndarray, hi: np.ndarray, spacing: float) -> np.ndarray:
+def _thread_crossings(edge, to_grain: np.ndarray, offset: np.ndarray, spacing: float) -> np.ndarray:
     """Points along ``edge`` (panel frame) [m] from its start to its end where it crosses a
-    grid thread, the crossing's coordinate across the thread set exactly to the thread's."""
-    offset = _grid_frame(np.array([lo, hi]), spacing, "")[4]
+    thread of the grid whose first node is ``offset`` (grain frame) [m], the crossing's
+    coordinate across the thread set exactly to the thread's."""
     dense = edge.sample(max(64 * segments_for(edge.length(), spacing), 64))
     g = dense @ to_grain.T
     found = [(0.0, g[0])]

@@ -108,10 +108,9 @@ def run_case(fabric: Fabric | None, solver: str, *, quick: bool = False, out=Non
         except SimulationUnstable as problem:
             result.checks.append(Check.decision(NAME, f"came to rest ({problem})", False, True))
             continue
-        dc, nodes = mean_result(drapes)
-        result.checks.append(Check.report(NAME, f"{f.name} drape coefficient DC [%]", dc))
-        result.checks.append(Check.report(NAME, f"{f.name} nodes (folds)", nodes))
-        result.details[f.name] = {"dc_percent": dc, "nodes": nodes, "specimens": _specimen_details(drapes)}
+        summary = result.details[f.name] = summarize(drapes)
+        result.checks.append(Check.report(NAME, f"{f.name} drape coefficient DC [%]", summary["dc_percent"]))
+        result.checks.append(Check.report(NAME, f"{f.name} nodes (folds)", summary["nodes"]))
         if out is not None:
             result.plots.append(plot_top_view(out / f"cusick_{f.name}.png", drapes[0],
                                               f"{f.name}, specimen 1 of {len(drapes)}"))
@@ -132,12 +131,11 @@ def run_measured(fabric: Fabric | None, solver: str, *, quick: bool = False, out
         except SimulationUnstable as problem:
             result.checks.append(Check.decision("cusick-measured", f"came to rest ({problem})", False, True))
             continue
-        dc, nodes = mean_result(drapes)
-        result.checks.append(Check.absolute("cusick-measured", f"{fabric.name} DC [%]", dc, measured_dc,
-                                            DC_TOLERANCE, "DC points"))
-        result.checks.append(Check.absolute("cusick-measured", f"{fabric.name} nodes", nodes, measured_nodes,
-                                            NODE_TOLERANCE, "nodes"))
-        result.details[fabric.name] = {"dc_percent": dc, "nodes": nodes, "specimens": _specimen_details(drapes)}
+        summary = result.details[fabric.name] = summarize(drapes)
+        result.checks.append(Check.absolute("cusick-measured", f"{fabric.name} DC [%]", summary["dc_percent"],
+                                            measured_dc, DC_TOLERANCE, "DC points"))
+        result.checks.append(Check.absolute("cusick-measured", f"{fabric.name} nodes", summary["nodes"],
+                                            measured_nodes, NODE_TOLERANCE, "nodes"))
         if out is not None:
             result.plots.append(plot_top_view(out / f"cusick_measured_{fabric.name}.png", drapes[0],
                                               f"{fabric.name}, specimen 1 of {len(drapes)} "
@@ -150,13 +148,12 @@ def drape_specimens(fabric: Fabric, solver: str, spacing: float, drapemeter: Dra
     return [drape_test(fabric, solver, spacing, drapemeter=drapemeter, seed=seed) for seed in range(count)]
 
 
-def mean_result(drapes: list[Drape]) -> tuple[float, float]:
-    """The specimens' mean DC [%] and mean number of nodes, as a drape test reports them."""
-    return (float(np.mean([100.0 * d.coefficient for d in drapes])), float(np.mean([d.nodes for d in drapes])))
-
-
-def _specimen_details(drapes: list[Drape]) -> list[dict]:
-    return [{"dc_percent": 100.0 * d.coefficient, "nodes": d.nodes} for d in drapes]
+def summarize(drapes: list[Drape]) -> dict:
+    """The specimens' mean DC [%] and mean number of nodes, as a drape test reports them, with
+    each specimen's."""
+    specimens = [{"dc_percent": 100.0 * d.coefficient, "nodes": d.nodes} for d in drapes]
+    return {"dc_percent": float(np.mean([s["dc_percent"] for s in specimens])),
+            "nodes": float(np.mean([s["nodes"] for s in specimens])), "specimens": specimens}
 
 
 def measured_fabrics() -> list[tuple[Fabric, float, int]]:
