@@ -104,6 +104,21 @@ def test_critical_time_step_scales_with_spacing():
     assert found[0.02] / found[0.01] == pytest.approx(2.0, rel=0.02)
 
 
+def test_critical_time_step_is_the_same_every_time():
+    """On a net too large for a dense eigenvalue solve (sparse, iterative), the stable step is
+    reproducible to the last bit, so that a run gives the same result every time."""
+    from party.fabric import wool_flannel
+    from party.meshing import rectangular_net
+
+    net = rectangular_net(0.4, 0.4, 0.02)
+    b = ModelBuilder()
+    b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
+    model = b.finalize("cpu")
+    assert 3 * model.node_count > 600
+    steps = {SolverExplicit(model, collision=None).critical_time_step() for _ in range(4)}
+    assert len(steps) == 1
+
+
 @pytest.mark.parametrize("c", [0.0, 2.0e3])
 def test_critical_time_step_with_damping_is_the_stability_edge(c):
     """One free node on a spring-damper to a pin: bounded at 0.99 dt_crit (near the edge the
@@ -126,3 +141,34 @@ def test_critical_time_step_with_damping_is_the_stability_edge(c):
             solver.step(state, scratch, model.control(), factor * dt_crit)
             state, scratch = scratch, state
         assert (not np.abs(state.velocities()[1]).max() < 100.0) == grows  # NaN counts as grown
+
+
+def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
+    """On the CPU a plastic-limit sweep is one launch over all colours in order; it must give
+    the velocities, to the bit, of one launch per colour, and leave no element beyond its limit
+    at the end of the step."""
+    from party.fabric import wool_flannel
+    from party.meshing import rectangular_net
+    from party.solvers.step_end import PLASTIC_TOLERANCE, StepEnd
+
+    net = rectangular_net(0.2, 0.2, 0.02)
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
+    model = b.finalize("cpu")
+    assert len(model.element_color_offsets) > 3
+    pull = np.random.default_rng(1).normal(0.0, 30.0, (model.node_count, 3))
+    dt = 1e-3
+    found = []
+    for serial in (True, False):
+        end = StepEnd(model, None, plastic_passes=200)
+        end._serial = serial
+        state = model.state()
+        state.node_qd.assign(pull.astype(np.float32))
+        end._apply_plastic_limit(state, dt)
+        found.append(state.velocities())
+    assert np.array_equal(found[0], found[1])
+    x = model.host["points"] + found[0] * dt
+    e = model.host["elements"]
+    length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
+    limit = model.element_max_length.numpy()
+    assert np.all(length <= limit * (1.0 + 2 * PLASTIC_TOLERANCE))

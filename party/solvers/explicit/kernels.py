@@ -93,13 +93,16 @@ def plastic_limit(
     elem_nodes: wp.array(dtype=wp.vec2i),
     max_length: wp.array(dtype=float),
     dt: float,
+    tolerance: float,
+    over: wp.array(dtype=int),
 ):
     """f_plas (section 5, figure 5): an element may not stretch beyond (1 + L_sh) l0.
 
     For an element whose length at the end of the step, |(r_k + v_k dt) - (r_i + v_i dt)|,
     would pass the limit, the relative velocity that stretches it further is cancelled (split
     by inverse mass), which is the force component f_plas removes. Elements of one colour share
-    no node, so a colour is processed in parallel; colours run one after another.
+    no node, so a colour is processed in parallel; colours run one after another. ``over``
+    counts the elements found beyond (1 + ``tolerance``) times their limit.
     """
     e = colored[offset + wp.tid()]
     pair = elem_nodes[e]
@@ -114,32 +117,12 @@ def plastic_limit(
     limit = max_length[e]
     if length <= limit:
         return
+    if length > limit * (1.0 + tolerance):
+        wp.atomic_add(over, 0, 1)
     direction = p / length
     excess = (length - limit) / (dt * (wi + wk))
     v[i] = v[i] + direction * (excess * wi)
     v[k] = v[k] - direction * (excess * wk)
-
-
-@wp.kernel
-def count_over_limit(
-    colored: wp.array(dtype=int),
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    inv_mass: wp.array(dtype=float),
-    elem_nodes: wp.array(dtype=wp.vec2i),
-    max_length: wp.array(dtype=float),
-    dt: float,
-    tolerance: float,
-    count: wp.array(dtype=int),
-):
-    """Count the limited elements (``colored``) whose end-of-step length would pass
-    (1 + tolerance) times their limit."""
-    e = colored[wp.tid()]
-    pair = elem_nodes[e]
-    if inv_mass[pair[0]] + inv_mass[pair[1]] == 0.0:
-        return
-    if wp.length(end_of_step_span(x, v, pair[0], pair[1], dt)) > max_length[e] * (1.0 + tolerance):
-        wp.atomic_add(count, 0, 1)
 
 
 @wp.kernel
