@@ -147,7 +147,8 @@ def run_drape(pattern: Path, body: str, solver: str) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         summary = drape(pattern, body, wool_flannel(), Path(tmp) / "drape", spacing=0.02, images=False,
                         progress=False, solver=solver)
-    return {"wall_seconds_to_rest": summary["wall_seconds"], "nodes": summary["nodes"],
+    return {"wall_seconds_to_rest": summary["wall_seconds"], "at_rest": summary["relaxation"]["at_rest"],
+            "nodes": summary["nodes"],
             "max_seam_gap_mm": summary["max_seam_gap_mm"], "body_penetrations": summary["body_penetrations"],
             "cloth_crossings": summary["cloth_crossings"], "ratio_to_garmentcode":
             GARMENTCODE_SECONDS / summary["wall_seconds"]}
@@ -171,7 +172,8 @@ def describe(row: dict) -> str:
     if "error" in row:
         return row["error"]
     if "wall_seconds_to_rest" in row:
-        return (f"{row['nodes']} nodes, {row['wall_seconds_to_rest']:.1f} s to rest, seam gap {row['max_seam_gap_mm']:.1f} mm, "
+        rest = "to rest" if row["at_rest"] else "and still moving"
+        return (f"{row['nodes']} nodes, {row['wall_seconds_to_rest']:.1f} s {rest}, seam gap {row['max_seam_gap_mm']:.1f} mm, "
                 f"penetrations {row['body_penetrations']}, crossings {row['cloth_crossings']}, "
                 f"{row['ratio_to_garmentcode']:.1f}x GarmentCode's 1,086 s")
     return (f"{row['wall_per_simulated_second']:.2f} s per simulated s (start-up {row['startup_seconds']:.1f} s), "

@@ -114,6 +114,14 @@ def drape_command(
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
               f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']}, "
               f"cloth crossings {summary['cloth_crossings']}, {summary['wall_seconds']:.0f} s")
+    relaxation = summary["relaxation"]
+    if summary["solver"] == "explicit":
+        out.print(f"relaxed ignoring inertia: energy settled in {relaxation['draping_steps']} iterations"
+                  if relaxation["at_rest"] else
+                  f"[yellow]relaxed ignoring inertia: energy still changing after {relaxation['draping_steps']} iterations[/]")
+    else:
+        out.print(f"at rest after {relaxation['draping_seconds']:g} s of draping" if relaxation["at_rest"] else
+                  f"[yellow]still moving after {relaxation['draping_seconds']:g} s of draping[/]")
     out.print(f"results in {out_dir}/")
 
 

@@ -3,6 +3,7 @@ and the crossing guard."""
 
 import numpy as np
 import pytest
+import warp as wp
 
 from party.body import sphere
 from party.collision import CollisionSettings
@@ -11,7 +12,7 @@ from party.meshing import rectangular_net
 from party.model import ModelBuilder
 from party.output.metrics import cloth_crossings, max_elongation
 from party.body.probe import ColliderProbe
-from party.solvers import SolverImplicit
+from party.solvers import SolverExplicit, SolverImplicit
 from party.solvers.explicit.solver import critical_time_step
 from party.solvers.relax import SolverRelax, total_energy
 from conftest import simulate
@@ -112,7 +113,8 @@ def test_large_steps_stay_stable_for_every_fabric(name):
     assert elongation.max() <= (1 + fabric.strain_limit) * 1.001
 
 
-def crossing_strips(guard: bool):
+def crossing_strips(guard: bool, solver_class=SolverImplicit, dt: float = 1.0 / 300.0, steps: int = 20,
+                    every: int = 1):
     """Two narrow strips in an X, the upper one tilted across its width and falling through the
     lower one so that edges pierce triangles while no node ever lies over the other strip."""
     fabric = wool_flannel()
@@ -123,17 +125,54 @@ def crossing_strips(guard: bool):
     y = upper.uv[:, 1] - 0.01
     b.add_cloth(upper, fabric, np.c_[upper.uv[:, 0] - 0.22, y, 0.012 + 0.5 * y])
     model = b.finalize("cpu")
-    solver = SolverImplicit(model, collision=CollisionSettings(crossing_guard=guard))
+    solver = solver_class(model, collision=CollisionSettings(crossing_guard=guard, guard_every=every))
     velocity = np.zeros((model.node_count, 3), np.float32)
     velocity[lower.node_count:, 2] = -0.6
     state, scratch = model.state(), model.state()
     state.node_qd.assign(velocity)
-    counts = []
-    for _ in range(20):
-        solver.step(state, scratch, model.control(), 1.0 / 300.0)
+    counts, stretch = [], []
+    limited = model.host["element_params"][:, 3] < 1e29
+    for k in range(1, steps + 1):
+        solver.step(state, scratch, model.control(), dt)
         state, scratch = scratch, state
-        counts.append(cloth_crossings(state.positions(), model.triangles))
+        if k % every == 0:
+            points = state.positions()
+            counts.append(cloth_crossings(points, model.triangles))
+            stretch.append(max_elongation(points, model.host["elements"], model.host["element_params"][:, 0], limited))
+    solver.crossing_stretch = np.array(stretch)
     return np.array(counts), solver
+
+
+@pytest.mark.parametrize("every", [1, 50])
+def test_crossing_guard_checking_every_few_explicit_steps_leaves_no_crossing(every):
+    """The paper's small steps with the guard checking every step, or every 50th: no crossing
+    at any check, and the nodes sent back (with their neighbours, where needed) leave no
+    element beyond its plastic limit."""
+    unguarded, _ = crossing_strips(False, SolverExplicit, 2e-4, 300, every)
+    assert unguarded.max() > 0
+    guarded, solver = crossing_strips(True, SolverExplicit, 2e-4, 300, every)
+    assert guarded.max() == 0 and solver.end.guard.reverts > 0
+    assert solver.crossing_stretch.max() <= (1 + wool_flannel().strain_limit) * 1.001
+
+
+@pytest.mark.parametrize("shift,reverted", [(0.002, [1, 0, 0]), (0.005, [1, 1, 1])])
+def test_crossing_guard_sends_neighbours_back_where_one_alone_would_overstretch(shift, reverted):
+    """A chain of 10 mm elements (plastic limit 10 %) moved 2 or 5 mm sideways since the last
+    check; sending its first node back alone would stretch its element to 10.2 mm (allowed) or
+    11.2 mm (not): then its neighbour goes back too, and so on down the chain."""
+    from party.collision.crossing_guard import CrossingGuard
+
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    nodes = [b.add_node((0.01 * k, 0.0, 0.0), 1e-3) for k in range(3)]
+    for i, k in zip(nodes, nodes[1:]):
+        b.add_element(i, k, stiffness=10.0, damping=0.0, rest_length=0.01, strain_limit=0.1)
+    model = b.finalize("cpu")
+    guard = CrossingGuard(model, every=2)
+    guard.anchor.assign(model.host["points"].astype(np.float32))
+    x = wp.array((model.host["points"] + [0.0, shift, 0.0]).astype(np.float32), dtype=wp.vec3)
+    guard.revert.assign(np.array([1, 0, 0], np.int32))
+    guard._spread(x)
+    assert guard.revert.numpy().tolist() == reverted
 
 
 def test_crossing_guard_stops_edges_piercing_between_nodes():

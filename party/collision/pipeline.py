@@ -33,6 +33,9 @@ class CollisionSettings:
             remembered and the search is repeated only once some node has moved half this
             far, so a larger margin means fewer searches but more candidates.
         max_cells: Largest number of intervals per axis in the interval lists.
+        crossing_guard: Check steps' ends for edges newly through triangles and revert them
+            (:mod:`party.collision.crossing_guard`).
+        guard_every: The guard checks every this many steps.
         exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
             (the node may not fold through its neighbours' triangles, which keeps sharp folds
             of a coarse net from crossing themselves); 1, also those holding one of its mesh
@@ -47,6 +50,7 @@ class CollisionSettings:
     exclude_ring: int = 0
     broad_phase: str = "intervals"
     crossing_guard: bool = False
+    guard_every: int = 1
 
     def __post_init__(self) -> None:
         if self.broad_phase not in ("intervals", "bvh"):

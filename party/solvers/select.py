@@ -20,6 +20,13 @@ DEFAULT_DT = {"explicit": 1.0e-4, "implicit": 1.0 / 300.0}
 the implicit one."""
 
 
+def guard_every(dt: float) -> int:
+    """Steps of ``dt`` [s] between crossing-guard checks: one check per implicit step's worth of
+    time (:data:`DEFAULT_DT`), so that the explicit solver's small steps pay for a check every
+    few dozen steps rather than every step, and a reverted node goes back at most 1/300 s."""
+    return max(1, int(DEFAULT_DT["implicit"] / dt * (1.0 + 1e-9)))
+
+
 def check_solver(name: str) -> str:
     if name not in SOLVERS:
         raise InvalidInput(f"unknown solver {name!r}; known: {', '.join(SOLVERS)}")

@@ -54,7 +54,7 @@ class StepEnd:
         self._serial = wp.get_device(model.device).is_cpu
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
         guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
-        self.guard = CrossingGuard(model) if guarded else None
+        self.guard = CrossingGuard(model, collision.guard_every) if guarded else None
         self.hysteresis = BendingHysteresis(model)
 
     def finish(self, state_in: State, state_out: State, dt: float) -> None:
@@ -78,6 +78,12 @@ class StepEnd:
                       inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
         self.hysteresis.update(state_in, state_out)
         state_out.time = state_in.time + dt
+
+    def flush(self, state: State) -> None:
+        """Run a crossing check that the guard's interval has left pending, so that ``state``
+        may be output or measured."""
+        if self.guard is not None and self.guard.pending:
+            self.guard.check(state.node_q, state.node_qd)
 
     def _apply_plastic_limit(self, state: State, dt: float) -> None:
         """Gauss-Seidel sweeps over the element colours until a sweep finds no element beyond

@@ -48,7 +48,7 @@ def _cantilever(result: CaseResult, fabric: Fabric, solver: str, quick: bool) ->
 
 
 def _cusick(result: CaseResult, fabric: Fabric, solver: str, quick: bool) -> None:
-    spacing = 0.015 if quick else 0.0106
+    spacing = 0.0212 if quick else 0.015  # down to case 6's 7.5 mm (5.3 mm took over an hour to settle)
     dc = [100.0 * cusick.drape_test(fabric, solver, spacing / math.sqrt(2) ** k).coefficient for k in range(3)]
     _add(result, f"{fabric.name} Cusick DC [%]", dc, math.sqrt(2), exact=None)
 
