@@ -150,3 +150,19 @@ def test_cusick_specimens_are_laid_flat_on_the_pedestal_and_wavy_beyond_it():
     assert np.all(cusick.waviness(inner, meter, 0) == 0.0)
     assert 0.6 * cusick.WAVINESS < np.sqrt(np.mean(np.square(rms))) < 1.4 * cusick.WAVINESS
     assert not np.allclose(cusick.waviness(edge, meter, 0), cusick.waviness(edge, meter, 1))
+
+
+def test_report_table_keeps_units_in_brackets():
+    """Quantities name their units in brackets, which rich would take for markup and drop."""
+    import io
+
+    from rich.console import Console
+
+    from party.validate.checks import CaseResult, Check
+    from party.validate.report import print_table
+
+    result = CaseResult("convergence")
+    result.checks.append(Check.report("convergence", "cotton cantilever bending length [mm]: observed order", 0.98))
+    text = io.StringIO()
+    print_table([result], Console(file=text, width=160))
+    assert "bending length [mm]: observed order" in text.getvalue()

@@ -21,6 +21,7 @@ def _number(x: float) -> str:
 
 def print_table(results: list[CaseResult], console) -> None:
     """One row per check: case, quantity, simulated, reference, error, tolerance, pass/fail."""
+    from rich.markup import escape
     from rich.table import Table
 
     table = Table(title="party validate")
@@ -28,11 +29,11 @@ def print_table(results: list[CaseResult], console) -> None:
         table.add_column(column, justify="right" if column in ("simulated", "reference", "error", "tolerance") else "left")
     for result in results:
         if "skipped" in result.details:
-            table.add_row(result.name, result.details["skipped"], "", "", "", "", "[yellow]skipped[/]")
+            table.add_row(result.name, escape(result.details["skipped"]), "", "", "", "", "[yellow]skipped[/]")
         for c in result.checks:
             error = _number(c.error) if c.error_kind in ("relative", "reported") else f"{_number(c.error)} ({c.error_kind})"
             verdict = "reported" if c.error_kind == "reported" else ("[green]pass[/]" if c.passed else "[red]FAIL[/]")
-            table.add_row(c.case, c.quantity, _number(c.simulated), _number(c.reference), error, _number(c.tolerance),
+            table.add_row(c.case, escape(c.quantity), _number(c.simulated), _number(c.reference), error, _number(c.tolerance),
                           verdict)
     if not console.is_terminal:  # a pipe or a log file: do not squeeze the table into 80 columns
         from rich.console import Console
