@@ -116,9 +116,8 @@ def drape_command(
               f"cloth crossings {summary['cloth_crossings']}, {summary['wall_seconds']:.0f} s")
     relaxation = summary["relaxation"]
     if summary["solver"] == "explicit":
-        out.print(f"relaxed ignoring inertia: energy settled in {relaxation['draping_steps']} iterations"
-                  if relaxation["at_rest"] else
-                  f"[yellow]relaxed ignoring inertia: energy still changing after {relaxation['draping_steps']} iterations[/]")
+        out.print(f"relaxed: energy settled in {relaxation['draping_steps']} iterations" if relaxation["at_rest"] else
+                  f"[yellow]relaxed: energy still changing after {relaxation['draping_steps']} iterations[/]")
     else:
         out.print(f"at rest after {relaxation['draping_seconds']:g} s of draping" if relaxation["at_rest"] else
                   f"[yellow]still moving after {relaxation['draping_seconds']:g} s of draping[/]")
