@@ -70,9 +70,8 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = C
     Each step of the solver is followed by a uniform drag that keeps exp(-dt / ``memory``) of
     the velocity (``memory`` [s]: both solvers damp alike whatever their step; 0.05 s damps the
     slow swing of a strip or a skirt near critically) and caps its speed at ``max_speed``
-    [m/s]. The model is at rest when, over two
-    checks ``check_every`` [s] apart, no node moved faster than ``rest_speed`` [m/s] on
-    average. (The net force on a node is no criterion: in stiff cloth the round-off of
+    [m/s]. The model is at rest when, over two checks ``check_every`` [s] apart, no node
+    moved faster than ``rest_speed`` [m/s] on average. (The net force on a node is no criterion: in stiff cloth the round-off of
     single-precision positions already leaves a few percent of a small node's weight. Kinetic
     damping, which stops each node where its velocity turns, was tried and let a finely meshed
     strip jitter at its speed cap.) ``steady(before, after)`` may judge two checks' positions
