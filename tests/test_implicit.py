@@ -140,6 +140,7 @@ def crossing_strips(guard: bool, solver_class=SolverImplicit, dt: float = 1.0 / 
             counts.append(cloth_crossings(points, model.triangles))
             stretch.append(max_elongation(points, model.host["elements"], model.host["element_params"][:, 0], limited))
     solver.crossing_stretch = np.array(stretch)
+    solver.final_points = state.positions()
     return np.array(counts), solver
 
 
@@ -173,6 +174,22 @@ def test_crossing_guard_sends_neighbours_back_where_one_alone_would_overstretch(
     guard.revert.assign(np.array([1, 0, 0], np.int32))
     guard._spread(x)
     assert guard.revert.numpy().tolist() == reverted
+
+
+def test_guard_and_collision_give_the_same_on_one_thread_and_on_several(monkeypatch):
+    """The crossing check, the collision searches and the block descent cut into chunks on three
+    CPU threads (:mod:`party.launch`) revert the same nodes and end bit for bit where one
+    thread leaves them."""
+    from party import launch
+
+    monkeypatch.setattr(launch, "MIN_CHUNK", 4)
+    runs = []
+    for threads in ("1", "3"):
+        monkeypatch.setenv("PARTY_THREADS", threads)
+        counts, solver = crossing_strips(guard=True)
+        runs.append((counts, solver.end.guard.reverts, solver.final_points))
+    assert runs[0][1] > 0 and runs[0][1] == runs[1][1]
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][2], runs[1][2])
 
 
 def test_crossing_guard_stops_edges_piercing_between_nodes():

@@ -16,6 +16,7 @@ MAX_FACES = 24
 
 @wp.kernel
 def gather_body_faces(
+    first: int,
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     inv_mass: wp.array(dtype=float),
@@ -30,7 +31,7 @@ def gather_body_faces(
     """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
     lets the answer serve the next steps, walked on the axis with n = min(n_x, n_y, n_z) list
     entries and box-checked in 3-D. The triangles found are kept for the narrow phase."""
-    i = wp.tid()
+    i = first + wp.tid()
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return
@@ -57,6 +58,7 @@ def gather_body_faces(
 
 @wp.kernel
 def gather_body_faces_bvh(
+    first: int,
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     inv_mass: wp.array(dtype=float),
@@ -70,7 +72,7 @@ def gather_body_faces_bvh(
 ):
     """:func:`gather_body_faces` with a BVH (:mod:`party.collision.bvh`) in place of the
     interval lists: the same box, the same triangles."""
-    i = wp.tid()
+    i = first + wp.tid()
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return
@@ -90,6 +92,7 @@ def gather_body_faces_bvh(
 
 @wp.kernel
 def collide_body(
+    first: int,
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     inv_mass: wp.array(dtype=float),
@@ -115,7 +118,7 @@ def collide_body(
     still end closer than eps to the triangle, the node's start is moved out along the face
     normal so that the step ends at eps (a position correction, adding no velocity).
     """
-    i = wp.tid()
+    i = first + wp.tid()
     if inv_mass[i] == 0.0:
         return
     x0 = x[i]

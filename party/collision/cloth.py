@@ -62,6 +62,7 @@ def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), tris
 
 @wp.kernel
 def gather_cloth_triangles_bvh(
+    first: int,
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     thickness: wp.array(dtype=float),
@@ -79,7 +80,7 @@ def gather_cloth_triangles_bvh(
 ):
     """:func:`gather_cloth_triangles` with a BVH (:mod:`party.collision.bvh`) in place of the
     interval lists: the same box, the same triangles kept."""
-    i = wp.tid()
+    i = first + wp.tid()
     x0 = x[i]
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
     query = wp.bvh_query_aabb(bvh, lo, hi)
@@ -92,6 +93,7 @@ def gather_cloth_triangles_bvh(
 
 @wp.kernel
 def gather_cloth_triangles(
+    first: int,
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     thickness: wp.array(dtype=float),
@@ -112,7 +114,7 @@ def gather_cloth_triangles(
     entries. Triangles holding the node (and, with ``ring`` 1, those holding one of its mesh
     neighbours, section 6.3) are left out; the nearest MAX_CANDIDATES others are kept for the following steps (the count of
     farther ones dropped goes to ``overflow``)."""
-    i = wp.tid()
+    i = first + wp.tid()
     x0 = x[i]
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
     sel = query_axis(lists, lo, hi)
@@ -132,6 +134,7 @@ def gather_cloth_triangles(
 
 @wp.kernel
 def detect_cloth(
+    first: int,
     x: wp.array(dtype=wp.vec3),
     v: wp.array(dtype=wp.vec3),
     thickness: wp.array(dtype=float),
@@ -151,7 +154,7 @@ def detect_cloth(
     the node is on at the start of the step; the pair is a contact when the predicted gap
     d + ((v_i - v_q) . n) dt is below eps. The nearest MAX_CONTACTS are kept.
     """
-    i = wp.tid()
+    i = first + wp.tid()
     x0 = x[i]
     vi = v[i]
     eps = thickness[i]

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
+from ..launch import launch_items
 from ..model import Model
 from ..meshing.net import triangle_edges
 from .geometry import edge_pierces_triangle
@@ -31,10 +32,13 @@ more than a few only when many layers pile up at once."""
 
 
 @wp.kernel
-def _check_edges(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
+def _check_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
                  edges: wp.array(dtype=wp.vec2i), crossed_before: wp.array(dtype=int),
-                 crossed_now: wp.array(dtype=int), revert: wp.array(dtype=int), new_count: wp.array(dtype=int)):
-    e = wp.tid()
+                 crossed_now: wp.array(dtype=int), revert: wp.array(dtype=int), found: wp.array(dtype=int)):
+    """Mark the edges through a triangle now; for those that were not at the last check, set
+    ``found`` and mark the edge's and triangle's nodes to revert (flags only: item-wise, see
+    :mod:`party.launch`)."""
+    e = first + wp.tid()
     i = edges[e][0]
     k = edges[e][1]
     crossed_now[e] = 0
@@ -44,7 +48,7 @@ def _check_edges(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.arra
         if edge_pierces_triangle(i, k, t, points, tris):
             crossed_now[e] = 1
             if crossed_before[e] == 0:
-                wp.atomic_add(new_count, 0, 1)
+                found[0] = 1
                 revert[i] = 1
                 revert[k] = 1
                 revert[tris[t, 0]] = 1
@@ -112,7 +116,7 @@ class CrossingGuard:
         self.crossed_now = wp.zeros(self.edge_count, dtype=int, device=dev)
         self.revert = wp.zeros(model.node_count, dtype=int, device=dev)
         self.reverted = wp.zeros(model.node_count, dtype=int, device=dev)
-        self.new_count = wp.zeros(1, dtype=int, device=dev)
+        self.found = wp.zeros(1, dtype=int, device=dev)
         self.anchor = wp.zeros(model.node_count, dtype=wp.vec3, device=dev)
         self.added = wp.zeros(1, dtype=int, device=dev)
         self._limited = bool(np.isfinite(model.element_max_length.numpy()).any())
@@ -144,7 +148,7 @@ class CrossingGuard:
         self.reverted.zero_()
         any_new = False
         for _ in range(MAX_ROUNDS):
-            if self._check(x) == 0:
+            if not self._check(x):
                 break
             any_new = True
             self._spread(x)
@@ -172,12 +176,13 @@ class CrossingGuard:
             if int(self.added.numpy()[0]) == 0:
                 break
 
-    def _check(self, x: wp.array) -> int:
+    def _check(self, x: wp.array) -> bool:
+        """Whether ``x`` has an edge through a triangle that the last check did not have."""
         m = self.model
         wp.copy(self.points, x)
         self.mesh.refit()
-        self.new_count.zero_()
-        wp.launch(_check_edges, dim=self.edge_count,
-                  inputs=[self.mesh.id, self.points, m.triangle_nodes, self.edges, self.crossed_before,
-                          self.crossed_now, self.revert, self.new_count], device=m.device)
-        return int(self.new_count.numpy()[0])
+        self.found.zero_()
+        launch_items(_check_edges, 0, self.edge_count,
+                     [self.mesh.id, self.points, m.triangle_nodes, self.edges, self.crossed_before, self.crossed_now,
+                      self.revert, self.found], m.device)
+        return bool(self.found.numpy()[0])

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
+from ..launch import launch_items
 from ..model import Model, State
 from ..errors import InvalidInput
 from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_bvh
@@ -118,10 +119,9 @@ class CollisionPipeline:
             if self.body_moving or int(self._flag.numpy()[0]):
                 self._search(x, v, state, dt)
         if self.has_cloth:
-            wp.launch(detect_cloth, dim=m.node_count,
-                      inputs=[x, v, m.node_thickness, m.triangle_nodes, self.cloth_candidates,
-                              self.cloth_candidate_count, dt, self.contact_tri, self.contact_w, self.contact_n,
-                              self.contact_d, self.contact_count], device=dev)
+            launch_items(detect_cloth, 0, m.node_count,
+                         [x, v, m.node_thickness, m.triangle_nodes, self.cloth_candidates, self.cloth_candidate_count,
+                          dt, self.contact_tri, self.contact_w, self.contact_n, self.contact_d, self.contact_count], dev)
         for _ in range(max(self.settings.passes, 1)):
             if self.has_cloth:
                 wp.launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
@@ -138,10 +138,10 @@ class CollisionPipeline:
         if not self.has_body:
             return
         m = self.model
-        wp.launch(collide_body, dim=m.node_count,
-                  inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution,
-                          state.collider_q, state.collider_qd, m.collider_normals, m.collider_faces,
-                          self.body_faces, self.body_face_count, dt, self.contacts], device=m.device)
+        launch_items(collide_body, 0, m.node_count,
+                     [x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution, state.collider_q,
+                      state.collider_qd, m.collider_normals, m.collider_faces, self.body_faces, self.body_face_count, dt,
+                      self.contacts], m.device)
 
     def _search(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         m = self.model
@@ -160,9 +160,9 @@ class CollisionPipeline:
                 self._body_built = True
             gather, structure = ((gather_body_faces_bvh, self.body_tree.id) if self.bvh
                                  else (gather_body_faces, self.body_lists.lists))
-            wp.launch(gather, dim=m.node_count,
-                      inputs=[x, v, m.node_inv_mass, m.node_thickness, structure, dt, half,
-                              self.body_faces, self.body_face_count, self._overflow], device=dev)
+            launch_items(gather, 0, m.node_count,
+                         [x, v, m.node_inv_mass, m.node_thickness, structure, dt, half, self.body_faces,
+                          self.body_face_count, self._overflow], dev)
         if self.has_cloth:
             if self.bvh:
                 self.cloth_tree.build(x, v, dt, half)
@@ -170,15 +170,16 @@ class CollisionPipeline:
             else:
                 self.cloth_lists.build_checked(x, v, dt, half)
                 gather, structure = gather_cloth_triangles, self.cloth_lists.lists
-            wp.launch(gather, dim=m.node_count,
-                      inputs=[x, v, m.node_thickness, m.triangle_nodes, m.node_neighbor_offsets, m.node_neighbors,
-                              structure, int(self.settings.exclude_ring), dt, half, self.cloth_candidates,
-                              self.cloth_candidate_count, self._candidate_distance, self._overflow], device=dev)
+            launch_items(gather, 0, m.node_count,
+                         [x, v, m.node_thickness, m.triangle_nodes, m.node_neighbor_offsets, m.node_neighbors, structure,
+                          int(self.settings.exclude_ring), dt, half, self.cloth_candidates, self.cloth_candidate_count,
+                          self._candidate_distance, self._overflow], dev)
         wp.copy(self._x_ref, x)
         self._flag.zero_()
 
     def candidate_overflow(self) -> int:
-        """How many candidate triangles were dropped because a node had too many (host sync)."""
+        """How many candidate triangles were dropped because a node had too many (host sync; a
+        lower bound when the gathering ran on several CPU threads, non-zero iff any was)."""
         return int(self._overflow.numpy()[0])
 
 

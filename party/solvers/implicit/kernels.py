@@ -88,8 +88,8 @@ def membrane_gradient(x: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim
 
 @wp.kernel
 def block_descent(
+    first: int,
     colored: wp.array(dtype=int),
-    offset: int,
     x_start: wp.array(dtype=wp.vec3),
     y: wp.array(dtype=wp.vec3),
     mass: wp.array(dtype=float),
@@ -123,7 +123,7 @@ def block_descent(
     L_ii I to the Hessian. Membrane triangles add their St. Venant-Kirchhoff terms
     (:func:`membrane_gradient`).
     """
-    i = colored[offset + wp.tid()]
+    i = colored[first + wp.tid()]
     if inv_mass[i] == 0.0:
         return
     xi = x[i]

@@ -9,6 +9,7 @@ import warp as wp
 
 from ...collision import CollisionSettings
 from ...errors import InvalidInput
+from ...launch import launch_items
 from ...model import Control, Model, State
 from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
@@ -129,13 +130,11 @@ class SolverImplicit:
         wp.copy(self._x_before, self._x)
         for iteration in range(self.iterations):
             for c in range(len(offsets) - 1):
-                wp.launch(block_descent, dim=offsets[c + 1] - offsets[c],
-                          inputs=[self._colored, offsets[c], state_in.node_q, self._y, m.node_mass, m.node_inv_mass,
-                                  self._spring_offsets, self._spring_other, self._spring_params, self._bend_offsets, self._bend_nodes,
-                                  self._bend_values, self._tri_offsets, self._tri_slots, m.triangle_nodes,
-                                  m.triangle_inv_rest, m.triangle_membrane_area, m.triangle_membrane_c, dt],
-                          outputs=[self._x],
-                          device=dev)
+                launch_items(block_descent, offsets[c], offsets[c + 1] - offsets[c],
+                             [self._colored, state_in.node_q, self._y, m.node_mass, m.node_inv_mass, self._spring_offsets,
+                              self._spring_other, self._spring_params, self._bend_offsets, self._bend_nodes,
+                              self._bend_values, self._tri_offsets, self._tri_slots, m.triangle_nodes, m.triangle_inv_rest,
+                              m.triangle_membrane_area, m.triangle_membrane_c, dt, self._x], dev)
             if self.chebyshev > 0.0:
                 if iteration == 0:
                     wp.copy(self._x_previous, self._x)

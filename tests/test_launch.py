@@ -1,0 +1,38 @@
+"""Item-wise kernels launched on several CPU threads give what one launch gives."""
+
+import numpy as np
+import pytest
+import warp as wp
+
+from party import launch
+from party.errors import InvalidInput
+
+
+@wp.kernel
+def _square_into(first: int, values: wp.array(dtype=float), out: wp.array(dtype=float), visits: wp.array(dtype=int)):
+    i = first + wp.tid()
+    out[i] = values[i] * values[i]
+    visits[i] = visits[i] + 1
+
+
+@pytest.fixture
+def small_chunks(monkeypatch):
+    monkeypatch.setattr(launch, "MIN_CHUNK", 16)
+    monkeypatch.setenv("PARTY_THREADS", "3")
+
+
+def test_chunks_cover_every_item_once(small_chunks):
+    values = wp.array(np.arange(1000, dtype=np.float32), dtype=float, device="cpu")
+    out = wp.zeros(1000, dtype=float, device="cpu")
+    visits = wp.zeros(1000, dtype=int, device="cpu")
+    for _ in range(2):  # the first launch of a kernel runs whole, the next in chunks
+        launch.launch_items(_square_into, 100, 850, [values, out, visits], "cpu")
+    expected = np.where((np.arange(1000) >= 100) & (np.arange(1000) < 950), np.arange(1000.0) ** 2, 0.0)
+    assert np.array_equal(out.numpy(), expected.astype(np.float32))
+    assert np.array_equal(visits.numpy(), 2 * (expected > 0))
+
+
+def test_a_bad_thread_count_is_one_line(monkeypatch):
+    monkeypatch.setenv("PARTY_THREADS", "two")
+    with pytest.raises(InvalidInput, match="^PARTY_THREADS must be a whole number, got 'two'$"):
+        launch.thread_count()
