@@ -107,13 +107,18 @@ def drape_command(
         raise InvalidInput(f"--spacing-mm must be positive, got {spacing_mm}")
     from .solvers.select import check_solver
 
-    summary = drape(pattern, body, fabric_by_name(fabric), out_dir, spacing=spacing_mm / 1000.0, device=device,
+    the_fabric = fabric_by_name(fabric)
+    summary = drape(pattern, body, the_fabric, out_dir, spacing=spacing_mm / 1000.0, device=device,
                     solver=check_solver(solver),
                     pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,
                     progress=progress)
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
               f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']}, "
               f"cloth crossings {summary['cloth_crossings']}, {summary['wall_seconds']:.0f} s")
+    if summary["max_sewn_elongation"] > 1.0 + the_fabric.strain_limit + 1e-3:
+        out.print(f"[yellow]tight: sewn up to {summary['max_sewn_elongation']:.2f} times rest length, beyond "
+                  f"{the_fabric.name}'s limit of {1.0 + the_fabric.strain_limit:.2f}; the pattern is smaller than "
+                  "this body there, and the cloth keeps that stretch[/]")
     relaxation = summary["relaxation"]
     if summary["solver"] == "explicit":
         out.print(f"relaxed: energy settled in {relaxation['draping_steps']} iterations" if relaxation["at_rest"] else

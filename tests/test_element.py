@@ -172,3 +172,18 @@ def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
     length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
     limit = model.element_max_length.numpy()
     assert np.all(length <= limit * (1.0 + 2 * PLASTIC_TOLERANCE))
+
+
+def test_elements_placed_beyond_their_limit_yield_to_the_placement():
+    """A chain placed with its second element at 1.5 times rest (limit 1.1): that element's
+    limit becomes its placed length and the others keep rest x 1.1; once yielded, nothing
+    is left to yield."""
+    b = ModelBuilder()
+    x = [0.0, 0.01, 0.025, 0.035]
+    nodes = [b.add_node((xi, 0.0, 0.0), 1e-3) for xi in x]
+    for i, k in zip(nodes, nodes[1:]):
+        b.add_element(i, k, stiffness=50.0, rest_length=0.01, strain_limit=0.1)
+    assert b.yield_to_placement() == (1, pytest.approx(1.5))
+    model = b.finalize("cpu")
+    assert model.element_max_length.numpy() == pytest.approx([0.011, 0.015, 0.011])
+    assert b.yield_to_placement() == (0, 1.0)

@@ -179,6 +179,22 @@ class ModelBuilder:
         self._node_count += len(points)
         return np.arange(start, self._node_count)
 
+    def yield_to_placement(self) -> tuple[int, float]:
+        """Raise the plastic limit of every element that its nodes' placement already stretches
+        beyond it to that length, as if the cloth had yielded there (a garment sewn tighter than
+        its wearer), so that the model starts within its limits; returns how many elements
+        yielded and the largest length / rest length among them (1 when none did)."""
+        points = np.concatenate(self._points)
+        count, worst = 0, 1.0
+        for pairs, params in zip(self._elements, self._element_params):
+            length = np.linalg.norm(points[pairs[:, 1]] - points[pairs[:, 0]], axis=1)
+            beyond = np.isfinite(params[:, 3]) & (length > params[:, 3])
+            if beyond.any():
+                params[beyond, 3] = length[beyond]
+                count += int(beyond.sum())
+                worst = max(worst, float((length[beyond] / params[beyond, 0]).max()))
+        return count, worst
+
     def _push_elements(self, pairs, rest, stiffness, damping, strain_limit) -> None:
         if np.any(~np.isfinite(stiffness) | (stiffness < 0)):
             raise InvalidInput("element stiffness must be non-negative and finite")

@@ -14,8 +14,11 @@ GarmentCode's flare dress). Output layout::
     OUT/images/front.png, side.png, back.png, energy.png
     OUT/relaxation.json                energy logs of sewing and draping
     OUT/summary.json                   nodes, seams, max seam gap [mm], body_penetrations,
-                                       cloth_crossings, relaxation (sewing iterations, draping
-                                       steps and simulated seconds, at_rest, final energy [J]),
+                                       cloth_crossings, max_elongation (draped) and
+                                       max_sewn_elongation (as sewn; above the fabric's
+                                       limit where the pattern is smaller than the body),
+                                       relaxation (sewing iterations, draping steps and
+                                       simulated seconds, at_rest, final energy [J]),
                                        wall_seconds
 """
 
@@ -105,6 +108,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
         "body_penetrations": ColliderProbe(the_body.colliders, model.device).penetrations(points),
         "cloth_crossings": cloth_crossings(points, model.triangles, model.device),
         "max_elongation": max_elongation(points, host["elements"], host["element_params"][:, 0], limited),
+        "max_sewn_elongation": max_elongation(sewn.points, host["elements"], host["element_params"][:, 0], limited),
         "relaxation": {
             "sewing_iterations": sewn.relaxation.iterations + sewn.settling.iterations, "draping_steps": draped.steps,
             "draping_seconds": round(draped.seconds, 3), "at_rest": draped.at_rest,
