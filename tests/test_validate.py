@@ -166,3 +166,22 @@ def test_report_table_keeps_units_in_brackets():
     text = io.StringIO()
     print_table([result], Console(file=text, width=160))
     assert "bending length [mm]: observed order" in text.getvalue()
+
+
+def test_report_table_says_whether_a_decision_was_right():
+    """A yes/no check's error reads "right" or "wrong" (it read "0 (wrong decision)" when right)."""
+    import io
+
+    from rich.console import Console
+
+    from party.validate.checks import CaseResult, Check
+    from party.validate.report import print_table
+
+    result = CaseResult("friction")
+    result.checks.append(Check.decision("friction", "stays at 28.96 deg", True, True))
+    result.checks.append(Check.decision("friction", "slides at 32.96 deg", False, True))
+    text = io.StringIO()
+    print_table([result], Console(file=text, width=160))
+    rows = [line for line in text.getvalue().splitlines() if "deg" in line]
+    assert "right" in rows[0] and "pass" in rows[0] and "wrong" not in rows[0]
+    assert "wrong" in rows[1] and "FAIL" in rows[1]

@@ -31,7 +31,7 @@ def print_table(results: list[CaseResult], console) -> None:
         if "skipped" in result.details:
             table.add_row(result.name, escape(result.details["skipped"]), "", "", "", "", "[yellow]skipped[/]")
         for c in result.checks:
-            error = _number(c.error) if c.error_kind in ("relative", "reported") else f"{_number(c.error)} ({c.error_kind})"
+            error = _error_text(c)
             verdict = "reported" if c.error_kind == "reported" else ("[green]pass[/]" if c.passed else "[red]FAIL[/]")
             table.add_row(c.case, escape(c.quantity), _number(c.simulated), _number(c.reference), error, _number(c.tolerance),
                           verdict)
@@ -40,6 +40,16 @@ def print_table(results: list[CaseResult], console) -> None:
 
         console = Console(file=console.file, width=160)
     console.print(table)
+
+
+def _error_text(check) -> str:
+    """The error column: a number, with its kind where it is not a relative error; for a
+    yes/no decision whether it was right."""
+    if check.error_kind == "wrong decision":
+        return "right" if check.passed else "wrong"
+    if check.error_kind in ("relative", "reported"):
+        return _number(check.error)
+    return f"{_number(check.error)} ({check.error_kind})"
 
 
 def write_results(results: list[CaseResult], path: Path, settings: dict) -> None:
