@@ -12,14 +12,13 @@ MAX_CONTACTS = 4
 
 
 @wp.func
-def is_neighbor(i: int, n: int, offsets: wp.array(dtype=int), neighbors: wp.array(dtype=int), ring: int) -> bool:
-    """Whether node n is node i (ring 0) or one of its mesh neighbours (ring 1)."""
+def is_excluded(i: int, n: int, offsets: wp.array(dtype=int), excluded: wp.array(dtype=int)) -> bool:
+    """Whether node n is node i or one of the nodes whose triangles node i does not collide
+    with (:meth:`party.collision.pipeline.CollisionPipeline.excluded_nodes`)."""
     if i == n:
         return True
-    if ring == 0:
-        return False
     for j in range(offsets[i], offsets[i + 1]):
-        if neighbors[j] == n:
+        if excluded[j] == n:
             return True
     return False
 
@@ -29,20 +28,27 @@ MAX_CANDIDATES = 48
 
 
 @wp.func
-def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
-                   nbr_offsets: wp.array(dtype=int), nbrs: wp.array(dtype=int), ring: int, count: int,
+def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+                   dt: float, reach: float, tris: wp.array(dtype=int, ndim=2),
+                   excluded_offsets: wp.array(dtype=int), excluded: wp.array(dtype=int), count: int,
                    out: wp.array(dtype=int, ndim=2), out_distance: wp.array(dtype=float, ndim=2),
                    overflow: wp.array(dtype=int)) -> int:
-    """Keep triangle t as a candidate of node i unless it holds the node (or, with ``ring`` 1,
-    one of its neighbours); beyond MAX_CANDIDATES the farthest is replaced. Returns the new
-    count."""
+    """Keep triangle t as a candidate of node i unless it holds the node or one of its excluded
+    nodes, or lies farther than ``reach`` (eps, the search margin and the node's step [m]) plus
+    its nodes' longest step: until the next search, node and triangle each move at most half
+    the margin beyond that, so they cannot come within eps. Beyond MAX_CANDIDATES the farthest
+    is replaced. Returns the new count."""
     ta = tris[t, 0]
     tb = tris[t, 1]
     tc = tris[t, 2]
-    if is_neighbor(i, ta, nbr_offsets, nbrs, ring) or is_neighbor(i, tb, nbr_offsets, nbrs, ring) or is_neighbor(i, tc, nbr_offsets, nbrs, ring):
+    if (is_excluded(i, ta, excluded_offsets, excluded) or is_excluded(i, tb, excluded_offsets, excluded)
+            or is_excluded(i, tc, excluded_offsets, excluded)):
         return count
     w = closest_point_barycentric(x0, x[ta], x[tb], x[tc])
     dist = wp.length(x0 - interpolate(w, x[ta], x[tb], x[tc]))
+    step = wp.max(wp.length(v[ta]), wp.max(wp.length(v[tb]), wp.length(v[tc]))) * dt
+    if dist > reach + step:
+        return count
     slot = count
     if count < MAX_CANDIDATES:
         count += 1
@@ -67,10 +73,9 @@ def gather_cloth_triangles_bvh(
     v: wp.array(dtype=wp.vec3),
     thickness: wp.array(dtype=float),
     tris: wp.array(dtype=int, ndim=2),
-    nbr_offsets: wp.array(dtype=int),
-    nbrs: wp.array(dtype=int),
+    excluded_offsets: wp.array(dtype=int),
+    excluded: wp.array(dtype=int),
     bvh: wp.uint64,
-    ring: int,
     dt: float,
     margin: float,
     out: wp.array(dtype=int, ndim=2),
@@ -83,11 +88,13 @@ def gather_cloth_triangles_bvh(
     i = first + wp.tid()
     x0 = x[i]
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
+    reach = thickness[i] + 2.0 * margin + wp.length(v[i]) * dt
     query = wp.bvh_query_aabb(bvh, lo, hi)
     t = int(0)
     count = int(0)
     while wp.bvh_query_next(query, t):
-        count = keep_candidate(i, t, x0, x, tris, nbr_offsets, nbrs, ring, count, out, out_distance, overflow)
+        count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count, out, out_distance,
+                                   overflow)
     out_count[i] = count
 
 
@@ -98,10 +105,9 @@ def gather_cloth_triangles(
     v: wp.array(dtype=wp.vec3),
     thickness: wp.array(dtype=float),
     tris: wp.array(dtype=int, ndim=2),
-    nbr_offsets: wp.array(dtype=int),
-    nbrs: wp.array(dtype=int),
+    excluded_offsets: wp.array(dtype=int),
+    excluded: wp.array(dtype=int),
     lists: IntervalLists,
-    ring: int,
     dt: float,
     margin: float,
     out: wp.array(dtype=int, ndim=2),
@@ -111,12 +117,14 @@ def gather_cloth_triangles(
 ):
     """The interval-list search of section 6.1 against the cloth's own triangles: the box
     spanned by r and r + dr grown by eps and a margin, walked on the axis with the fewest
-    entries. Triangles holding the node (and, with ``ring`` 1, those holding one of its mesh
-    neighbours, section 6.3) are left out; the nearest MAX_CANDIDATES others are kept for the following steps (the count of
-    farther ones dropped goes to ``overflow``)."""
+    entries. Triangles holding the node or one of its excluded nodes (section 6.3; see
+    :meth:`~party.collision.pipeline.CollisionPipeline.excluded_nodes`) are left out; the
+    nearest MAX_CANDIDATES others are kept for the following steps (the count of farther ones
+    dropped goes to ``overflow``)."""
     i = first + wp.tid()
     x0 = x[i]
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
+    reach = thickness[i] + 2.0 * margin + wp.length(v[i]) * dt
     sel = query_axis(lists, lo, hi)
     axis = sel[0]
     base = axis * (lists.max_cells + 1)
@@ -128,7 +136,8 @@ def gather_cloth_triangles(
                 continue
             if not boxes_overlap(lo, hi, lists.item_lo[t], lists.item_hi[t]):
                 continue
-            count = keep_candidate(i, t, x0, x, tris, nbr_offsets, nbrs, ring, count, out, out_distance, overflow)
+            count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count, out, out_distance,
+                                   overflow)
     out_count[i] = count
 
 

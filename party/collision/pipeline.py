@@ -40,7 +40,8 @@ class CollisionSettings:
         exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
             (the node may not fold through its neighbours' triangles, which keeps sharp folds
             of a coarse net from crossing themselves); 1, also those holding one of its mesh
-            neighbours.
+            neighbours. Either way, also those holding a node nearer along the net than cloth
+            of its thickness can fold (``Model.node_near``).
     """
 
     body: bool = True
@@ -94,6 +95,9 @@ class CollisionPipeline:
                 self.cloth_tree = TriangleBvh(model.triangle_nodes)
             else:
                 self.cloth_lists = AxisIntervalLists(model.triangle_nodes, min_cell=size, max_cells=settings.max_cells)
+            offsets, excluded = self.excluded_nodes()
+            self._excluded_offsets = wp.array(offsets, dtype=int, device=dev)
+            self._excluded = wp.array(excluded, dtype=int, device=dev)
             self.cloth_candidates = wp.zeros((n, MAX_CANDIDATES), dtype=int, device=dev)
             self.cloth_candidate_count = wp.zeros(n, dtype=int, device=dev)
             self._candidate_distance = wp.zeros((n, MAX_CANDIDATES), dtype=float, device=dev)
@@ -171,11 +175,26 @@ class CollisionPipeline:
                 self.cloth_lists.build_checked(x, v, dt, half)
                 gather, structure = gather_cloth_triangles, self.cloth_lists.lists
             launch_items(gather, 0, m.node_count,
-                         [x, v, m.node_thickness, m.triangle_nodes, m.node_neighbor_offsets, m.node_neighbors, structure,
-                          int(self.settings.exclude_ring), dt, half, self.cloth_candidates, self.cloth_candidate_count,
-                          self._candidate_distance, self._overflow], dev)
+                         [x, v, m.node_thickness, m.triangle_nodes, self._excluded_offsets, self._excluded, structure,
+                          dt, half, self.cloth_candidates, self.cloth_candidate_count, self._candidate_distance,
+                          self._overflow], dev)
         wp.copy(self._x_ref, x)
         self._flag.zero_()
+
+    def excluded_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """CSR (offsets, node ids) of the nodes whose triangles each node does not collide
+        with, the node itself aside: those nearer along the net than cloth of its thickness
+        can fold (``Model.node_near``) and, with ``exclude_ring`` 1, its mesh neighbours."""
+        m = self.model
+        lists = [(m.node_near_offsets.numpy(), m.node_near.numpy())]
+        if self.settings.exclude_ring >= 1:
+            lists.append((m.node_neighbor_offsets.numpy(), m.node_neighbors.numpy()))
+        rows = np.concatenate([np.repeat(np.arange(m.node_count), np.diff(o)) for o, _ in lists])
+        ids = np.concatenate([i for _, i in lists])
+        pairs = np.unique(np.c_[rows, ids], axis=0) if len(ids) else np.zeros((0, 2), np.int64)
+        offsets = np.zeros(m.node_count + 1, np.int64)
+        np.add.at(offsets, pairs[:, 0] + 1, 1)
+        return np.cumsum(offsets).astype(np.int32), pairs[:, 1].astype(np.int32)
 
     def candidate_overflow(self) -> int:
         """How many candidate triangles were dropped because a node had too many (host sync; a

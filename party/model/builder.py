@@ -15,6 +15,15 @@ from ..meshing.hinges import hinges
 from ..meshing.net import ClothNet, ElementKind
 from ..units import GRAVITY
 from .model import Model
+from .nearby import nodes_within
+
+FOLD_REACH = 0.5 * np.pi
+"""Cloth of thickness eps folded back onto itself turns through a half circle of diameter eps,
+a length of pi eps / 2: points nearer than this along the net at rest cannot touch. Their
+triangles are left out of each other's cloth-cloth collision (``Model.node_near``); where
+the net is finer than the thickness, neighbouring triangles of one flat layer lay within eps of
+each node and pushed it sideways (a 3 mm net of 3 mm cloth, at rest and without gravity,
+moved 1.3 mm in three implicit steps)."""
 
 HYSTERESIS_STIFFNESS = 5.0
 """Stiffness of a bending stencil's hysteresis element while it sticks, in units of the
@@ -238,6 +247,7 @@ class ModelBuilder:
         edges = np.unique(np.sort(edges, axis=1), axis=0) if len(edges) else edges
         nbr_offsets, nbr_ids = _csr(np.concatenate([edges[:, 0], edges[:, 1]]),
                                     np.concatenate([edges[:, 1], edges[:, 0]]), n)
+        near_offsets, near_ids = nodes_within(elements, params[:, 0], FOLD_REACH * material[:, 4], n)
         limited_ids = np.flatnonzero(np.isfinite(params[:, 3])) if len(params) else np.zeros(0, np.int64)
         color_offsets, colored = _color_elements(elements[limited_ids], n)
         colored = limited_ids[colored].astype(np.int32)
@@ -267,6 +277,8 @@ class ModelBuilder:
             node_element_ids=arr(elem_ids, wp.int32),
             node_neighbor_offsets=arr(nbr_offsets, wp.int32),
             node_neighbors=arr(nbr_ids, wp.int32),
+            node_near_offsets=arr(near_offsets, wp.int32),
+            node_near=arr(near_ids, wp.int32),
             element_nodes=arr(elements.astype(np.int32), wp.vec2i),
             element_rest_length=arr(params[:, 0].astype(np.float32), wp.float32),
             element_stiffness=arr(params[:, 1].astype(np.float32), wp.float32),

@@ -26,6 +26,10 @@ class Model:
         node_element_offsets, node_element_ids: CSR list of the elements at each node.
         node_neighbor_offsets, node_neighbors: CSR list of each node's mesh neighbours (nodes
             sharing a triangle), excluded from cloth-cloth response (section 6.3).
+        node_near_offsets, node_near: CSR list of the nodes less than
+            :data:`~party.model.builder.FOLD_REACH` times the node's thickness from it along
+            the net at rest: cloth that close cannot fold back onto the node, so their
+            triangles are no collision partners of it.
         element_nodes: (i, k) per element, vec2i.
         element_rest_length: l0_ik [m].
         element_stiffness: e_ik as a spring constant [N/m].
@@ -75,6 +79,8 @@ class Model:
     node_element_ids: wp.array
     node_neighbor_offsets: wp.array
     node_neighbors: wp.array
+    node_near_offsets: wp.array
+    node_near: wp.array
     element_nodes: wp.array
     element_rest_length: wp.array
     element_stiffness: wp.array
