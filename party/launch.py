@@ -60,6 +60,8 @@ def launch_items(kernel: Any, first: int, count: int, inputs: Sequence[Any], dev
         return
     global _pool, _pool_threads
     if _pool_threads < threads - 1:
+        if _pool is not None:
+            _pool.shutdown(wait=False)
         _pool = ThreadPoolExecutor(max_workers=threads - 1, thread_name_prefix="party-launch")
         _pool_threads = threads - 1
     bounds = [first + count * k // threads for k in range(threads + 1)]
