@@ -192,6 +192,20 @@ def test_guard_and_collision_give_the_same_on_one_thread_and_on_several(monkeypa
     assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][2], runs[1][2])
 
 
+def test_crossing_guard_rechecking_only_around_reverted_nodes_finds_what_a_full_recheck_finds(monkeypatch):
+    """After a revert the guard rechecks only the edges with a node sent back and those near a
+    triangle with one; on the falling strips (15 rechecks) that reverts the same nodes and ends
+    bit for bit where rechecking every edge does."""
+    from party.collision.crossing_guard import CrossingGuard
+
+    partial_counts, partial = crossing_strips(guard=True)
+    monkeypatch.setattr(CrossingGuard, "_recheck", lambda self, x: self._check(x))
+    full_counts, full = crossing_strips(guard=True)
+    assert partial.end.guard.reverts == full.end.guard.reverts > 0
+    assert np.array_equal(partial_counts, full_counts) and partial_counts.max() == 0
+    assert np.array_equal(partial.final_points, full.final_points)
+
+
 def test_crossing_guard_stops_edges_piercing_between_nodes():
     unguarded, _ = crossing_strips(guard=False)
     assert unguarded.max() > 0  # node-triangle detection alone lets these edges through

@@ -9,7 +9,8 @@ them). It checks every edge: checking only edges with a node whose
 collision search had found cloth triangles along its step saved some 15 % of a self-colliding
 step, but let an edge longer than the search's reach pass through a triangle unseen
 (GarmentCode's hoody draped with the implicit solver: 2 crossings). It repeats until no new crossing is left: at worst every
-node is back at its start, which had none, so no step ever creates a crossing. Crossings
+node is back at its start, which had none, so no step ever creates a crossing. A repeat
+rechecks only the edges whose answer the revert can have changed (:meth:`CrossingGuard._recheck`). Crossings
 present before a step (from a set-up) are left alone and not counted as new.
 """
 
@@ -33,12 +34,15 @@ more than a few only when many layers pile up at once."""
 
 @wp.kernel
 def _check_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
-                 edges: wp.array(dtype=wp.vec2i), crossed_before: wp.array(dtype=int),
-                 crossed_now: wp.array(dtype=int), revert: wp.array(dtype=int), found: wp.array(dtype=int)):
-    """Mark the edges through a triangle now; for those that were not at the last check, set
-    ``found`` and mark the edge's and triangle's nodes to revert (flags only: item-wise, see
-    :mod:`party.launch`)."""
+                 edges: wp.array(dtype=wp.vec2i), dirty: wp.array(dtype=int), everything: int,
+                 crossed_before: wp.array(dtype=int), crossed_now: wp.array(dtype=int), revert: wp.array(dtype=int),
+                 found: wp.array(dtype=int)):
+    """Mark the edges through a triangle now (all of them, or with ``everything`` 0 only the
+    ``dirty`` ones); for those that were not at the last check, set ``found`` and mark the
+    edge's and triangle's nodes to revert (flags only: item-wise, see :mod:`party.launch`)."""
     e = first + wp.tid()
+    if everything == 0 and dirty[e] == 0:
+        return
     i = edges[e][0]
     k = edges[e][1]
     crossed_now[e] = 0
@@ -85,13 +89,49 @@ def _spread_revert(elem_nodes: wp.array(dtype=wp.vec2i), max_length: wp.array(dt
 
 @wp.kernel
 def _revert(x_start: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), revert: wp.array(dtype=int),
-            x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), reverted: wp.array(dtype=int)):
+            x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), reverted: wp.array(dtype=int),
+            moved: wp.array(dtype=int)):
     i = wp.tid()
+    moved[i] = 0
     if revert[i] != 0 and inv_mass[i] > 0.0:
         x[i] = x_start[i]
         v[i] = wp.vec3(0.0)
         reverted[i] = 1
+        moved[i] = 1
     revert[i] = 0
+
+
+@wp.kernel
+def _edge_boxes(first: int, points: wp.array(dtype=wp.vec3), edges: wp.array(dtype=wp.vec2i),
+                moved: wp.array(dtype=int), lower: wp.array(dtype=wp.vec3), upper: wp.array(dtype=wp.vec3),
+                dirty: wp.array(dtype=int)):
+    """Each edge's box, and whether one of its nodes has just moved back."""
+    e = first + wp.tid()
+    i = edges[e][0]
+    k = edges[e][1]
+    lower[e] = wp.min(points[i], points[k])
+    upper[e] = wp.max(points[i], points[k])
+    dirty[e] = wp.where(moved[i] != 0 or moved[k] != 0, 1, 0)
+
+
+@wp.kernel
+def _edges_near_moved_triangles(first: int, edge_tree: wp.uint64, before: wp.array(dtype=wp.vec3),
+                                points: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim=2),
+                                moved: wp.array(dtype=int), dirty: wp.array(dtype=int)):
+    """Mark dirty the edges whose box meets a triangle that has a node just moved back, where
+    it was ``before`` or where it is now: they may now cross it, or no longer (flags only)."""
+    t = first + wp.tid()
+    a = tris[t, 0]
+    b = tris[t, 1]
+    c = tris[t, 2]
+    if moved[a] == 0 and moved[b] == 0 and moved[c] == 0:
+        return
+    lo = wp.min(wp.min(points[a], wp.min(points[b], points[c])), wp.min(before[a], wp.min(before[b], before[c])))
+    hi = wp.max(wp.max(points[a], wp.max(points[b], points[c])), wp.max(before[a], wp.max(before[b], before[c])))
+    query = wp.bvh_query_aabb(edge_tree, lo, hi)
+    e = int(0)
+    while wp.bvh_query_next(query, e):
+        dirty[e] = 1
 
 
 class CrossingGuard:
@@ -119,6 +159,11 @@ class CrossingGuard:
         self.found = wp.zeros(1, dtype=int, device=dev)
         self.anchor = wp.zeros(model.node_count, dtype=wp.vec3, device=dev)
         self.added = wp.zeros(1, dtype=int, device=dev)
+        self.moved = wp.zeros(model.node_count, dtype=int, device=dev)
+        self.dirty = wp.zeros(self.edge_count, dtype=int, device=dev)
+        self._edge_lower = wp.zeros(self.edge_count, dtype=wp.vec3, device=dev)
+        self._edge_upper = wp.zeros(self.edge_count, dtype=wp.vec3, device=dev)
+        self._edge_tree: wp.Bvh | None = None
         self._limited = bool(np.isfinite(model.element_max_length.numpy()).any())
         self.reverts = 0
         self.pending = 0
@@ -147,13 +192,13 @@ class CrossingGuard:
         self.pending = 0
         self.reverted.zero_()
         any_new = False
-        for _ in range(MAX_ROUNDS):
-            if not self._check(x):
+        for round in range(MAX_ROUNDS):
+            if not (self._check(x) if round == 0 else self._recheck(x)):
                 break
             any_new = True
             self._spread(x)
-            wp.launch(_revert, dim=m.node_count, inputs=[self.anchor, m.node_inv_mass, self.revert, x, v, self.reverted],
-                      device=m.device)
+            wp.launch(_revert, dim=m.node_count,
+                      inputs=[self.anchor, m.node_inv_mass, self.revert, x, v, self.reverted, self.moved], device=m.device)
         wp.copy(self.crossed_before, self.crossed_now)
         wp.copy(self.anchor, x)
         count = int(self.reverted.numpy().sum()) if any_new else 0
@@ -176,13 +221,32 @@ class CrossingGuard:
             if int(self.added.numpy()[0]) == 0:
                 break
 
-    def _check(self, x: wp.array) -> bool:
-        """Whether ``x`` has an edge through a triangle that the last check did not have."""
+    def _check(self, x: wp.array, everything: bool = True) -> bool:
+        """Whether ``x`` has an edge through a triangle that the last check did not have
+        (checking every edge, or only the dirty ones)."""
         m = self.model
         wp.copy(self.points, x)
         self.mesh.refit()
         self.found.zero_()
         launch_items(_check_edges, 0, self.edge_count,
-                     [self.mesh.id, self.points, m.triangle_nodes, self.edges, self.crossed_before, self.crossed_now,
-                      self.revert, self.found], m.device)
+                     [self.mesh.id, self.points, m.triangle_nodes, self.edges, self.dirty, int(everything),
+                      self.crossed_before, self.crossed_now, self.revert, self.found], m.device)
         return bool(self.found.numpy()[0])
+
+    def _recheck(self, x: wp.array) -> bool:
+        """:meth:`_check` after a revert, of only the edges whose answer it can have changed:
+        those with a node that moved back and those near a triangle with one, where it was or
+        where it is now (found with a BVH over the edges' boxes; ``self.points`` still holds the
+        last round's positions); every other edge and every triangle near it stayed where the
+        last round checked them. (Rechecking every edge made three of four checks of the
+        reference dress's implicit drape, 14 of its 30 s.)"""
+        m = self.model
+        launch_items(_edge_boxes, 0, self.edge_count,
+                     [x, self.edges, self.moved, self._edge_lower, self._edge_upper, self.dirty], m.device)
+        if self._edge_tree is None:
+            self._edge_tree = wp.Bvh(self._edge_lower, self._edge_upper)
+        else:
+            self._edge_tree.refit()
+        launch_items(_edges_near_moved_triangles, 0, m.triangle_count,
+                     [self._edge_tree.id, self.points, x, m.triangle_nodes, self.moved, self.dirty], m.device)
+        return self._check(x, everything=False)
