@@ -14,7 +14,7 @@ MAX_CONTACTS = 4
 @wp.func
 def is_excluded(i: int, n: int, offsets: wp.array(dtype=int), excluded: wp.array(dtype=int)) -> bool:
     """Whether node n is node i or one of the nodes whose triangles node i does not collide
-    with (:meth:`party.collision.pipeline.CollisionPipeline.excluded_nodes`)."""
+    with (:meth:`party.collision.pipeline.CollisionPipeline._excluded_nodes`)."""
     if i == n:
         return True
     for j in range(offsets[i], offsets[i + 1]):
@@ -118,7 +118,7 @@ def gather_cloth_triangles(
     """The interval-list search of section 6.1 against the cloth's own triangles: the box
     spanned by r and r + dr grown by eps and a margin, walked on the axis with the fewest
     entries. Triangles holding the node or one of its excluded nodes (section 6.3; see
-    :meth:`~party.collision.pipeline.CollisionPipeline.excluded_nodes`) are left out; the
+    :meth:`~party.collision.pipeline.CollisionPipeline._excluded_nodes`) are left out; the
     nearest MAX_CANDIDATES others are kept for the following steps (the count of farther ones
     dropped goes to ``overflow``)."""
     i = first + wp.tid()

@@ -95,9 +95,7 @@ class CollisionPipeline:
                 self.cloth_tree = TriangleBvh(model.triangle_nodes)
             else:
                 self.cloth_lists = AxisIntervalLists(model.triangle_nodes, min_cell=size, max_cells=settings.max_cells)
-            offsets, excluded = self.excluded_nodes()
-            self._excluded_offsets = wp.array(offsets, dtype=int, device=dev)
-            self._excluded = wp.array(excluded, dtype=int, device=dev)
+            self._excluded_offsets, self._excluded = self._excluded_nodes()
             self.cloth_candidates = wp.zeros((n, MAX_CANDIDATES), dtype=int, device=dev)
             self.cloth_candidate_count = wp.zeros(n, dtype=int, device=dev)
             self._candidate_distance = wp.zeros((n, MAX_CANDIDATES), dtype=float, device=dev)
@@ -181,20 +179,21 @@ class CollisionPipeline:
         wp.copy(self._x_ref, x)
         self._flag.zero_()
 
-    def excluded_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+    def _excluded_nodes(self) -> tuple[wp.array, wp.array]:
         """CSR (offsets, node ids) of the nodes whose triangles each node does not collide
         with, the node itself aside: those nearer along the net than cloth of its thickness
         can fold (``Model.node_near``) and, with ``exclude_ring`` 1, its mesh neighbours."""
         m = self.model
-        lists = [(m.node_near_offsets.numpy(), m.node_near.numpy())]
-        if self.settings.exclude_ring >= 1:
-            lists.append((m.node_neighbor_offsets.numpy(), m.node_neighbors.numpy()))
-        rows = np.concatenate([np.repeat(np.arange(m.node_count), np.diff(o)) for o, _ in lists])
-        ids = np.concatenate([i for _, i in lists])
-        pairs = np.unique(np.c_[rows, ids], axis=0) if len(ids) else np.zeros((0, 2), np.int64)
-        offsets = np.zeros(m.node_count + 1, np.int64)
-        np.add.at(offsets, pairs[:, 0] + 1, 1)
-        return np.cumsum(offsets).astype(np.int32), pairs[:, 1].astype(np.int32)
+        if self.settings.exclude_ring == 0:
+            return m.node_near_offsets, m.node_near
+        rows, ids = [], []
+        for offsets, nodes in ((m.node_near_offsets, m.node_near), (m.node_neighbor_offsets, m.node_neighbors)):
+            rows.append(np.repeat(np.arange(m.node_count), np.diff(offsets.numpy())))
+            ids.append(nodes.numpy())
+        pairs = np.unique(np.c_[np.concatenate(rows), np.concatenate(ids)], axis=0)
+        offsets = np.searchsorted(pairs[:, 0], np.arange(m.node_count + 1))
+        return (wp.array(offsets.astype(np.int32), dtype=int, device=m.device),
+                wp.array(pairs[:, 1].astype(np.int32), dtype=int, device=m.device))
 
     def candidate_overflow(self) -> int:
         """How many candidate triangles were dropped because a node had too many (host sync; a

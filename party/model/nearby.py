@@ -8,8 +8,9 @@ import numpy as np
 def nodes_within(elements: np.ndarray, rest_length: np.ndarray, radius: np.ndarray,
                  node_count: int) -> tuple[np.ndarray, np.ndarray]:
     """For each node i, the other nodes reachable from it along elements whose rest lengths
-    [m] add up to less than ``radius[i]`` [m] (shortest paths over the element graph, Dijkstra
-    by rounds of vectorised relaxation); returned as CSR (offsets, node ids)."""
+    [m] add up to less than ``radius[i]`` [m] (shortest paths over the element graph, found by
+    rounds of vectorised relaxation from the pairs the last round reached or shortened);
+    returned as CSR (offsets, node ids)."""
     empty = (np.zeros(node_count + 1, np.int32), np.zeros(0, np.int32))
     if len(elements) == 0 or not np.any(radius > 0.0):
         return empty
@@ -25,22 +26,23 @@ def nodes_within(elements: np.ndarray, rest_length: np.ndarray, radius: np.ndarr
     source = np.arange(node_count, dtype=np.int64)
     node = source.copy()
     distance = np.zeros(node_count)
-    while True:
-        degree = offsets[node + 1] - offsets[node]
-        parent = np.repeat(np.arange(len(node)), degree)
-        edge = offsets[node][parent] + np.arange(len(parent)) - np.repeat(np.cumsum(degree) - degree, degree)
+    frontier = np.ones(node_count, bool)  # pairs reached or shortened last round: only they can lead further
+    while frontier.any():
+        grow = np.flatnonzero(frontier)
+        degree = offsets[node[grow] + 1] - offsets[node[grow]]
+        parent = np.repeat(grow, degree)
+        edge = np.repeat(offsets[node[grow]] - (np.cumsum(degree) - degree), degree) + np.arange(len(parent))
         reached = distance[parent] + length[edge]
         keep = reached < radius[source[parent]]
         pairs_source = np.concatenate([source, source[parent][keep]])
         pairs_node = np.concatenate([node, head[edge][keep]])
         pairs_distance = np.concatenate([distance, reached[keep]])
         key = pairs_source * node_count + pairs_node
-        best = np.lexsort((pairs_distance, key))
+        best = np.lexsort((pairs_distance, key))  # by pair, shortest first; a tie keeps the known one
         first = np.ones(len(best), bool)
         first[1:] = key[best][1:] != key[best][:-1]
         best = best[first]
-        if len(best) == len(node) and np.array_equal(pairs_distance[best], distance):  # both in key order
-            break
+        frontier = best >= len(node)
         source, node, distance = pairs_source[best], pairs_node[best], pairs_distance[best]
     other = node != source
     rows, ids = source[other], node[other]
