@@ -34,12 +34,17 @@ def check_solver(name: str) -> str:
 
 
 def make_solver(name: str, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
-                air: Air | None = None):
+                air: Air | None = None, iterations: int | None = None):
     """The solver ``name`` (see :data:`SOLVERS`) for ``model``: the explicit one with the
     paper's Collision(), the implicit one with the crossing guard on as well, since its
-    longer steps let more edges slip through each other."""
+    longer steps let more edges slip through each other. ``iterations``: the implicit
+    solver's sweeps per step (None: its default)."""
     if check_solver(name) == "explicit":
+        if iterations is not None:
+            raise InvalidInput("iterations apply to the implicit solver only")
         return SolverExplicit(model, collision=collision, air=air)
     if collision is not None:
         collision = replace(collision, crossing_guard=True)
-    return SolverImplicit(model, collision=collision, air=air)
+    if iterations is None:
+        return SolverImplicit(model, collision=collision, air=air)
+    return SolverImplicit(model, collision=collision, air=air, iterations=iterations)

@@ -59,7 +59,7 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = C
            max_seconds: float | None = None, state: State | None = None,
            steady: Callable[[np.ndarray, np.ndarray], bool] | None = None,
            on_check: Callable[[int, State], None] | None = None, dt: float | None = None,
-           max_speed: float = math.inf) -> Settled:
+           max_speed: float = math.inf, iterations: int | None = None) -> Settled:
     """Bring ``model`` to static equilibrium from ``state`` (default: its set-up state).
     Raises :class:`SimulationUnstable` on blow-up; returns with ``at_rest`` False when
     ``max_seconds`` of simulated time pass first (default :data:`MAX_SECONDS`: the implicit
@@ -78,9 +78,10 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = C
     [m] as well: the model is then also at rest when that says the quantity a case measures,
     or the shape, has stopped changing, though single nodes may go on creeping or jittering.
     ``on_check(step, state)`` is called at every check (progress, logs). The step ``dt`` [s]
-    is :func:`dynamics_time_step`'s unless given."""
+    is :func:`dynamics_time_step`'s unless given; ``iterations``, the implicit solver's sweeps
+    per step, its default unless given."""
     dt = dt or dynamics_time_step(model, solver)
-    stepper = make_solver(solver, model, collision=collision)
+    stepper = make_solver(solver, model, collision=collision, iterations=iterations)
     keep = math.exp(-dt / memory)
     state = state or model.state()
     scratch = model.state()

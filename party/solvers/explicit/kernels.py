@@ -94,15 +94,18 @@ def plastic_limit(
     max_length: wp.array(dtype=float),
     dt: float,
     tolerance: float,
+    over_relaxation: float,
     over: wp.array(dtype=int),
 ):
     """f_plas (section 5, figure 5): an element may not stretch beyond (1 + L_sh) l0.
 
     For an element whose length at the end of the step, |(r_k + v_k dt) - (r_i + v_i dt)|,
     would pass the limit, the relative velocity that stretches it further is cancelled (split
-    by inverse mass), which is the force component f_plas removes. Elements of one colour share
-    no node, so a colour is processed in parallel; colours run one after another. ``over``
-    counts the elements found beyond (1 + ``tolerance``) times their limit.
+    by inverse mass), which is the force component f_plas removes; ``over_relaxation`` > 1
+    cancels that much more (projected successive over-relaxation, see
+    :class:`~party.solvers.step_end.StepEnd`). Elements of one colour share no node, so a
+    colour is processed in parallel; colours run one after another. ``over`` counts the
+    elements found beyond (1 + ``tolerance``) times their limit.
     """
     e = colored[offset + wp.tid()]
     pair = elem_nodes[e]
@@ -120,7 +123,7 @@ def plastic_limit(
     if length > limit * (1.0 + tolerance):
         wp.atomic_add(over, 0, 1)
     direction = p / length
-    excess = (length - limit) / (dt * (wi + wk))
+    excess = over_relaxation * (length - limit) / (dt * (wi + wk))
     v[i] = v[i] + direction * (excess * wi)
     v[k] = v[k] - direction * (excess * wk)
 

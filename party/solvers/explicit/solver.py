@@ -9,7 +9,7 @@ from ...collision import CollisionSettings
 from ...errors import InvalidInput
 from ...model import Control, Model, State
 from ..aero import Air, AirForces
-from ..step_end import StepEnd
+from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
 from .kernels import hinge_forces, kinetic_damping, net_forces_and_velocity
 
 
@@ -31,7 +31,9 @@ class SolverExplicit:
         plastic_passes: Most sweeps over the element colours per step enforcing the plastic
             limit (sweeps stop as soon as no element is beyond it).
         kinetic_damping: ``(max_speed [m/s], keep [-])`` to filter v* for static relaxation
-            (:mod:`party.solvers.relax`); None for dynamics.
+            (:mod:`party.solvers.relax`); None for dynamics. Dynamics applies the paper's f_plas
+            as it is; relaxation, which seeks only the rest shape, over-relaxes its sweeps
+            (:class:`~party.solvers.step_end.StepEnd`).
     """
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
@@ -42,8 +44,9 @@ class SolverExplicit:
                                "solver only; use --solver implicit")
         self.model = model
         self.kinetic_damping = kinetic_damping
-        self.end = StepEnd(model, collision, plastic_passes,
-                           max_speed=kinetic_damping[0] if kinetic_damping is not None else None)
+        relaxing = kinetic_damping is not None
+        self.end = StepEnd(model, collision, plastic_passes, max_speed=kinetic_damping[0] if relaxing else None,
+                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION if relaxing else 1.0)
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         self._f_ext = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)

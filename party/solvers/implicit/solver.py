@@ -13,7 +13,7 @@ from ...launch import launch_items
 from ...model import Control, Model, State
 from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
-from ..step_end import StepEnd
+from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
 from .kernels import block_descent, chebyshev_blend, inertial_target, record_correction, step_velocity
 
 
@@ -40,7 +40,8 @@ class SolverImplicit:
             none; fixed like ``iterations``).
         collision: Collision settings; ``None`` switches collision off.
         air: Wind and air drag; ``None`` for none.
-        plastic_passes: See :class:`~party.solvers.step_end.StepEnd`.
+        plastic_passes: See :class:`~party.solvers.step_end.StepEnd`; the sweeps are
+            over-relaxed by :data:`~party.solvers.step_end.PLASTIC_OVER_RELAXATION`.
         kinetic_damping: ``(max_speed [m/s], keep [-])`` to filter v* for static relaxation
             (:mod:`party.solvers.relax`); None for dynamics.
     """
@@ -59,7 +60,8 @@ class SolverImplicit:
         if collision is not None:
             collision = replace(collision, broad_phase="bvh")
         self.end = StepEnd(model, collision, plastic_passes, limit_after_contact=True,
-                           max_speed=kinetic_damping[0] if kinetic_damping is not None else None)
+                           max_speed=kinetic_damping[0] if kinetic_damping is not None else None,
+                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION)
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         dev = model.device
