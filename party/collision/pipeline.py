@@ -9,6 +9,7 @@ import warp as wp
 
 from ..launch import launch_items
 from ..model import Model, State
+from ..model.csr import csr_order
 from ..errors import InvalidInput
 from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_bvh
 from .bvh import TriangleBvh
@@ -191,9 +192,9 @@ class CollisionPipeline:
             rows.append(np.repeat(np.arange(m.node_count), np.diff(offsets.numpy())))
             ids.append(nodes.numpy())
         pairs = np.unique(np.c_[np.concatenate(rows), np.concatenate(ids)], axis=0)
-        offsets = np.searchsorted(pairs[:, 0], np.arange(m.node_count + 1))
+        offsets, order = csr_order(pairs[:, 0], m.node_count)
         return (wp.array(offsets.astype(np.int32), dtype=int, device=m.device),
-                wp.array(pairs[:, 1].astype(np.int32), dtype=int, device=m.device))
+                wp.array(pairs[order, 1].astype(np.int32), dtype=int, device=m.device))
 
     def candidate_overflow(self) -> int:
         """How many candidate triangles were dropped because a node had too many (host sync; a

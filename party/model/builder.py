@@ -14,6 +14,7 @@ from ..fabric import Fabric
 from ..meshing.hinges import hinges
 from ..meshing.net import ClothNet, ElementKind
 from ..units import GRAVITY
+from .csr import csr_order
 from .model import Model
 from .nearby import nodes_within
 
@@ -358,10 +359,8 @@ def _membrane(net: ClothNet, fabric: Fabric) -> tuple[np.ndarray, np.ndarray, np
 
 
 def _csr(rows: np.ndarray, values: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    order = np.argsort(rows, kind="stable")
-    offsets = np.zeros(n + 1, np.int32)
-    np.add.at(offsets, rows + 1, 1)
-    return np.cumsum(offsets).astype(np.int32), values[order].astype(np.int32)
+    offsets, order = csr_order(rows, n)
+    return offsets.astype(np.int32), values[order].astype(np.int32)
 
 
 def _color_elements(elements: np.ndarray, n: int) -> tuple[list[int], np.ndarray]:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .csr import csr_order
+
 
 def nodes_within(elements: np.ndarray, rest_length: np.ndarray, radius: np.ndarray,
                  node_count: int) -> tuple[np.ndarray, np.ndarray]:
@@ -17,11 +19,8 @@ def nodes_within(elements: np.ndarray, rest_length: np.ndarray, radius: np.ndarr
     tail = np.concatenate([elements[:, 0], elements[:, 1]]).astype(np.int64)
     head = np.concatenate([elements[:, 1], elements[:, 0]]).astype(np.int64)
     length = np.concatenate([rest_length, rest_length]).astype(np.float64)
-    order = np.argsort(tail, kind="stable")
+    offsets, order = csr_order(tail, node_count)
     head, length = head[order], length[order]
-    offsets = np.zeros(node_count + 1, np.int64)
-    np.add.at(offsets, tail + 1, 1)
-    offsets = np.cumsum(offsets)
 
     source = np.arange(node_count, dtype=np.int64)
     node = source.copy()
@@ -45,6 +44,5 @@ def nodes_within(elements: np.ndarray, rest_length: np.ndarray, radius: np.ndarr
         frontier = best >= len(node)
         source, node, distance = pairs_source[best], pairs_node[best], pairs_distance[best]
     other = node != source
-    rows, ids = source[other], node[other]
-    counts = np.bincount(rows, minlength=node_count)
-    return np.concatenate([[0], np.cumsum(counts)]).astype(np.int32), ids.astype(np.int32)
+    offsets, order = csr_order(source[other], node_count)
+    return offsets.astype(np.int32), node[other][order].astype(np.int32)

@@ -11,6 +11,7 @@ from ...collision import CollisionSettings
 from ...errors import InvalidInput
 from ...launch import launch_items
 from ...model import Control, Model, State
+from ...model.csr import csr_order
 from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
@@ -158,10 +159,8 @@ def node_springs(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     rows = np.concatenate([e[:, 0], e[:, 1]])
     other = np.concatenate([e[:, 1], e[:, 0]])
     values = np.concatenate([params[:, :3], params[:, :3]])
-    order = np.argsort(rows, kind="stable")
-    offsets = np.zeros(model.node_count + 1, np.int64)
-    np.add.at(offsets, rows + 1, 1)
-    return np.cumsum(offsets).astype(np.int32), other[order].astype(np.int32), values[order]
+    offsets, order = csr_order(rows, model.node_count)
+    return offsets.astype(np.int32), other[order].astype(np.int32), values[order]
 
 
 def node_triangles(model: Model) -> tuple[np.ndarray, np.ndarray]:
@@ -170,11 +169,8 @@ def node_triangles(model: Model) -> tuple[np.ndarray, np.ndarray]:
     tri = model.host["triangles"].astype(np.int64)
     membrane = model.host["membrane_area"] > 0.0
     slots = np.arange(tri.size, dtype=np.int64).reshape(-1, 3)[membrane].ravel()
-    rows = tri[membrane].ravel()
-    order = np.argsort(rows, kind="stable")
-    offsets = np.zeros(model.node_count + 1, np.int64)
-    np.add.at(offsets, rows + 1, 1)
-    return np.cumsum(offsets).astype(np.int32), slots[order].astype(np.int32)
+    offsets, order = csr_order(tri[membrane].ravel(), model.node_count)
+    return offsets.astype(np.int32), slots[order].astype(np.int32)
 
 
 def color_nodes(model: Model) -> tuple[list[int], np.ndarray]:
