@@ -28,14 +28,21 @@ MAX_CANDIDATES = 48
 
 
 @wp.func
+def search_reach(eps: float, margin: float, vi: wp.vec3, dt: float) -> float:
+    """How far [m] from a node a triangle may lie and still be kept (:func:`keep_candidate`):
+    eps, the search margin (twice ``margin``, the half margin each side may move) and the
+    node's step, before adding the triangle's own step."""
+    return eps + 2.0 * margin + wp.length(vi) * dt
+
+
+@wp.func
 def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
                    dt: float, reach: float, tris: wp.array(dtype=int, ndim=2),
                    excluded_offsets: wp.array(dtype=int), excluded: wp.array(dtype=int), count: int,
                    out: wp.array(dtype=int, ndim=2), out_distance: wp.array(dtype=float, ndim=2),
                    overflow: wp.array(dtype=int)) -> int:
     """Keep triangle t as a candidate of node i unless it holds the node or one of its excluded
-    nodes, or lies farther than ``reach`` (eps, the search margin and the node's step [m]) plus
-    its nodes' longest step: until the next search, node and triangle each move at most half
+    nodes, or lies farther than ``reach`` (:func:`search_reach`) plus its nodes' longest step: until the next search, node and triangle each move at most half
     the margin beyond that, so they cannot come within eps. Beyond MAX_CANDIDATES the farthest
     is replaced. Returns the new count."""
     ta = tris[t, 0]
@@ -88,7 +95,7 @@ def gather_cloth_triangles_bvh(
     i = first + wp.tid()
     x0 = x[i]
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
-    reach = thickness[i] + 2.0 * margin + wp.length(v[i]) * dt
+    reach = search_reach(thickness[i], margin, v[i], dt)
     query = wp.bvh_query_aabb(bvh, lo, hi)
     t = int(0)
     count = int(0)
@@ -124,7 +131,7 @@ def gather_cloth_triangles(
     i = first + wp.tid()
     x0 = x[i]
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
-    reach = thickness[i] + 2.0 * margin + wp.length(v[i]) * dt
+    reach = search_reach(thickness[i], margin, v[i], dt)
     sel = query_axis(lists, lo, hi)
     axis = sel[0]
     base = axis * (lists.max_cells + 1)
