@@ -150,7 +150,9 @@ def run_drape(pattern: Path, body: str, solver: str) -> dict:
     return {"wall_seconds_to_rest": summary["wall_seconds"], "at_rest": summary["relaxation"]["at_rest"],
             "nodes": summary["nodes"],
             "max_seam_gap_mm": summary["max_seam_gap_mm"], "body_penetrations": summary["body_penetrations"],
-            "cloth_crossings": summary["cloth_crossings"], "ratio_to_garmentcode":
+            "body_vertices_through_cloth": summary["body_vertices_through_cloth"],
+            "cloth_crossings": summary["cloth_crossings"], "max_elongation": summary["max_elongation"],
+            "ratio_to_garmentcode":
             GARMENTCODE_SECONDS / summary["wall_seconds"]}
 
 
@@ -174,7 +176,8 @@ def describe(row: dict) -> str:
     if "wall_seconds_to_rest" in row:
         rest = "to rest" if row["at_rest"] else "and still moving"
         return (f"{row['nodes']} nodes, {row['wall_seconds_to_rest']:.1f} s {rest}, seam gap {row['max_seam_gap_mm']:.1f} mm, "
-                f"penetrations {row['body_penetrations']}, crossings {row['cloth_crossings']}, "
+                f"penetrations {row['body_penetrations']} (body vertices through {row['body_vertices_through_cloth']}), "
+                f"crossings {row['cloth_crossings']}, elongation {row['max_elongation']:.3f}, "
                 f"{row['ratio_to_garmentcode']:.1f}x GarmentCode's 1,086 s")
     return (f"{row['wall_per_simulated_second']:.2f} s per simulated s (start-up {row['startup_seconds']:.1f} s), "
             f"min r {row['min_distance_from_centre_m']:.4f} m, inside {row['nodes_inside']}, "

@@ -113,7 +113,8 @@ def drape_command(
                     pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,
                     progress=progress)
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
-              f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']}, "
+              f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']} "
+              f"(body vertices through the cloth {summary['body_vertices_through_cloth']}), "
               f"cloth crossings {summary['cloth_crossings']}, {summary['wall_seconds']:.0f} s")
     if summary["max_sewn_elongation"] > 1.0 + the_fabric.strain_limit + 1e-3:
         out.print(f"[yellow]tight: sewn up to {summary['max_sewn_elongation']:.2f} times rest length, beyond "

@@ -12,6 +12,7 @@ from ..model import Model, State
 from ..model.csr import csr_order
 from ..errors import InvalidInput
 from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_bvh
+from .body_vertices import MAX_VERTICES, gather_body_vertices, respond_body_vertices, vertex_boxes
 from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
                     gather_cloth_triangles_bvh, respond_cloth)
@@ -38,6 +39,10 @@ class CollisionSettings:
         crossing_guard: Check steps' ends for edges newly through triangles and revert them
             (:mod:`party.collision.crossing_guard`).
         guard_every: The guard checks every this many steps.
+        body_vertices: Cloth triangles respond to the body's vertices as well (ours:
+            :mod:`party.collision.body_vertices`), so that no body vertex comes through a
+            triangle between the cloth's nodes; on with the implicit solver
+            (:func:`party.solvers.select.large_step_collision`).
         exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
             (the node may not fold through its neighbours' triangles, which keeps sharp folds
             of a coarse net from crossing themselves); 1, also those holding one of its mesh
@@ -54,6 +59,7 @@ class CollisionSettings:
     broad_phase: str = "intervals"
     crossing_guard: bool = False
     guard_every: int = 1
+    body_vertices: bool = False
 
     def __post_init__(self) -> None:
         if self.broad_phase not in ("intervals", "bvh"):
@@ -90,6 +96,20 @@ class CollisionPipeline:
             self.body_faces = wp.zeros((n, MAX_FACES), dtype=int, device=dev)
             self.body_face_count = wp.zeros(n, dtype=int, device=dev)
             self._body_built = False
+        self.has_body_vertices = self.has_body and settings.body_vertices and model.triangle_count > 0
+        if self.has_body_vertices:
+            normals = np.concatenate([c.vertex_normals() for c in model.host["colliders"]])
+            self.body_vertex_normals = wp.array(normals.astype(np.float32), dtype=wp.vec3, device=dev)
+            self._vertex_lower = wp.zeros(len(normals), dtype=wp.vec3, device=dev)
+            self._vertex_upper = wp.zeros(len(normals), dtype=wp.vec3, device=dev)
+            self._vertex_tree: wp.Bvh | None = None
+            t = model.triangle_count
+            self.body_vertices = wp.zeros((t, MAX_VERTICES), dtype=int, device=dev)
+            self.body_vertex_count = wp.zeros(t, dtype=int, device=dev)
+            self._vertex_distance = wp.zeros((t, MAX_VERTICES), dtype=float, device=dev)
+            self._vertex_dv = wp.zeros(n, dtype=wp.vec3, device=dev)
+            self._vertex_dx = wp.zeros(n, dtype=wp.vec3, device=dev)
+            self._vertex_hits = wp.zeros(n, dtype=int, device=dev)
         if self.has_cloth:
             size = _triangle_size(model.host["points"], model.triangles)
             if self.bvh:
@@ -126,6 +146,7 @@ class CollisionPipeline:
                          [x, v, m.node_thickness, m.triangle_nodes, self.cloth_candidates, self.cloth_candidate_count,
                           dt, self.contact_tri, self.contact_w, self.contact_n, self.contact_d, self.contact_count], dev)
         for _ in range(max(self.settings.passes, 1)):
+            self.vertex_pass(x, v, state, dt)
             if self.has_cloth:
                 wp.launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
                           inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_gamma, m.node_kappa,
@@ -135,6 +156,19 @@ class CollisionPipeline:
             self.body_pass(x, v, state, dt)
             if not self.has_cloth:
                 break
+
+    def vertex_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
+        """One pass of cloth triangles against the body's vertices
+        (:mod:`party.collision.body_vertices`) over the candidates of the last search."""
+        if not self.has_body_vertices:
+            return
+        m = self.model
+        wp.launch(respond_body_vertices, dim=m.triangle_count,
+                  inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
+                          state.collider_qd, self.body_vertex_normals, self.body_vertices, self.body_vertex_count, dt,
+                          self._vertex_dv, self._vertex_dx, self._vertex_hits], device=m.device)
+        wp.launch(apply_cloth_response, dim=m.node_count,
+                  inputs=[x, v, self._vertex_dv, self._vertex_dx, self._vertex_hits], device=m.device)
 
     def body_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """One cloth-body response pass (eqs. 8-12) over the candidates of the last search."""
@@ -166,6 +200,18 @@ class CollisionPipeline:
             launch_items(gather, 0, m.node_count,
                          [x, v, m.node_inv_mass, m.node_thickness, structure, dt, half, self.body_faces,
                           self.body_face_count, self._overflow], dev)
+        if self.has_body_vertices:
+            wp.launch(vertex_boxes, dim=len(state.collider_q),
+                      inputs=[state.collider_q, state.collider_qd, dt, half, self._vertex_lower, self._vertex_upper],
+                      device=dev)
+            if self._vertex_tree is None:
+                self._vertex_tree = wp.Bvh(self._vertex_lower, self._vertex_upper)
+            elif self.body_moving:
+                self._vertex_tree.refit()
+            launch_items(gather_body_vertices, 0, m.triangle_count,
+                         [x, v, m.node_thickness, m.triangle_nodes, self._vertex_tree.id, state.collider_q,
+                          state.collider_qd, dt, half, self.body_vertices, self.body_vertex_count,
+                          self._vertex_distance, self._overflow], dev)
         if self.has_cloth:
             if self.bvh:
                 self.cloth_tree.build(x, v, dt, half)
@@ -197,8 +243,9 @@ class CollisionPipeline:
                 wp.array(pairs[order, 1].astype(np.int32), dtype=int, device=m.device))
 
     def candidate_overflow(self) -> int:
-        """How many candidate triangles were dropped because a node had too many (host sync; a
-        lower bound when the gathering ran on several CPU threads, non-zero iff any was)."""
+        """How many candidates (body or cloth triangles of a node, body vertices of a cloth
+        triangle) were dropped for want of room (host sync; a lower bound when the gathering
+        ran on several CPU threads, non-zero iff any was)."""
         return int(self._overflow.numpy()[0])
 
 

@@ -1,5 +1,6 @@
 """Checks of a result, independent of the solver's own collision machinery (Warp BVHs):
-nodes inside colliders, distance to colliders, cloth layer crossings, elongation."""
+nodes inside colliders, distance to colliders, body vertices through the cloth, cloth layer
+crossings, elongation."""
 
 from __future__ import annotations
 
@@ -35,6 +36,36 @@ def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.a
         if edge_pierces_triangle(i, k, t, points, tris):
             wp.atomic_add(count, 0, 1)
             crossed[e] = 1
+
+
+@wp.kernel
+def _height_over_vertex(cloth: wp.uint64, vertices: wp.array(dtype=wp.vec3), normals: wp.array(dtype=wp.vec3),
+                        reach: float, height: wp.array(dtype=float)):
+    i = wp.tid()
+    height[i] = 1.0e30
+    found = wp.mesh_query_point_no_sign(cloth, vertices[i], reach)
+    if found.result:
+        q = wp.mesh_eval_position(cloth, found.face, found.u, found.v)
+        height[i] = wp.dot(q - vertices[i], normals[i])
+
+
+def body_vertices_through(points: np.ndarray, triangles: np.ndarray, colliders, reach: float = 0.02,
+                          device: str = "cpu") -> int:
+    """Number of collider vertices that come through the cloth: the nearest cloth point, if
+    within ``reach`` [m], lies behind the vertex along its normal. Nodes can all be outside a
+    body while its vertices poke through the triangles between them (seen as skin through the
+    cloth in pictures); zero when the cloth covers the body wherever it lies on it."""
+    if len(triangles) == 0 or not colliders:
+        return 0
+    vertices = np.concatenate([c.vertices for c in colliders]).astype(np.float32)
+    normals = np.concatenate([c.vertex_normals() for c in colliders]).astype(np.float32)
+    cloth = wp.Mesh(points=wp.array(points.astype(np.float32), dtype=wp.vec3, device=device),
+                    indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
+    height = wp.zeros(len(vertices), dtype=float, device=device)
+    wp.launch(_height_over_vertex, dim=len(vertices),
+              inputs=[cloth.id, wp.array(vertices, dtype=wp.vec3, device=device),
+                      wp.array(normals, dtype=wp.vec3, device=device), float(reach), height], device=device)
+    return int(np.sum(height.numpy() < 0.0))
 
 
 def cloth_crossings(points: np.ndarray, triangles: np.ndarray, device: str = "cpu") -> int:

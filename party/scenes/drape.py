@@ -14,7 +14,8 @@ GarmentCode's flare dress). Output layout::
     OUT/images/front.png, side.png, back.png, energy.png
     OUT/relaxation.json                energy logs of sewing and draping
     OUT/summary.json                   nodes, seams, max seam gap [mm], body_penetrations,
-                                       cloth_crossings, max_elongation (draped) and
+                                       body_vertices_through_cloth, cloth_crossings,
+                                       max_elongation (draped) and
                                        max_sewn_elongation (as sewn; above the fabric's
                                        limit where the pattern is smaller than the body),
                                        relaxation (sewing iterations, draping steps and
@@ -38,7 +39,7 @@ from ..fabric import Fabric
 from ..garment.assemble import assemble
 from ..output.frames import write_json, write_mesh
 from ..output.garment_export import write_garment
-from ..output.metrics import cloth_crossings, max_elongation
+from ..output.metrics import body_vertices_through, cloth_crossings, max_elongation
 from ..pattern import load_pattern
 from ..collision import CollisionSettings
 from ..model import Model
@@ -114,6 +115,8 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
         "seam_gaps_mm": {f"{s.a}-{s.b}": round(1000.0 * g, 3) for s, g in zip(the_pattern.seams, sewn.seam_gaps)},
         "body_penetrations": ColliderProbe(the_body.colliders, model.device).penetrations(points),
         "cloth_crossings": cloth_crossings(points, model.triangles, model.device),
+        "body_vertices_through_cloth": body_vertices_through(points, model.triangles, the_body.colliders,
+                                                             device=model.device),
         "max_elongation": max_elongation(points, host["elements"], host["element_params"][:, 0], limited),
         "max_sewn_elongation": max_elongation(sewn.points, host["elements"], host["element_params"][:, 0], limited),
         "relaxation": {

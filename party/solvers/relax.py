@@ -14,7 +14,7 @@ fewer iterations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -22,6 +22,7 @@ from ..collision import CollisionSettings
 from ..model import Control, Model, State
 from .explicit.solver import SolverExplicit
 from .implicit import SolverImplicit
+from .select import large_step_collision
 
 
 def total_energy(model: Model, points: np.ndarray) -> float:
@@ -70,9 +71,8 @@ class SolverRelax:
         damping = (max_speed, 1.0 if momentum == 0.0 else momentum)
         if solver == "explicit":
             self.stepper = SolverExplicit(model, collision=collision, kinetic_damping=damping)
-        else:  # with the crossing guard, as make_solver gives it: large steps slip through more
-            guarded = replace(collision, crossing_guard=True) if collision is not None else None
-            self.stepper = SolverImplicit(model, collision=guarded, kinetic_damping=damping)
+        else:
+            self.stepper = SolverImplicit(model, collision=large_step_collision(collision), kinetic_damping=damping)
 
     def iterate(self, state: State, scratch: State, control: Control, dt: float) -> None:
         """One iteration from ``state`` into ``scratch`` (swap after)."""

@@ -27,6 +27,14 @@ def guard_every(dt: float) -> int:
     return max(1, int(DEFAULT_DT["implicit"] / dt * (1.0 + 1e-9)))
 
 
+def large_step_collision(collision: CollisionSettings | None) -> CollisionSettings | None:
+    """``collision`` for the implicit solver's large steps: with the crossing guard on, since
+    they let more edges slip through each other, and cloth triangles answering body vertices
+    (:mod:`party.collision.body_vertices`), whose pushes the guard keeps from crossing layers.
+    The explicit solver keeps the paper's Collision() as printed."""
+    return None if collision is None else replace(collision, crossing_guard=True, body_vertices=True)
+
+
 def check_solver(name: str) -> str:
     if name not in SOLVERS:
         raise InvalidInput(f"unknown solver {name!r}; known: {', '.join(SOLVERS)}")
@@ -36,15 +44,13 @@ def check_solver(name: str) -> str:
 def make_solver(name: str, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
                 air: Air | None = None, iterations: int | None = None):
     """The solver ``name`` (see :data:`SOLVERS`) for ``model``: the explicit one with the
-    paper's Collision(), the implicit one with the crossing guard on as well, since its
-    longer steps let more edges slip through each other. ``iterations``: the implicit
-    solver's sweeps per step (None: its default)."""
+    paper's Collision(), the implicit one with :func:`large_step_collision`. ``iterations``:
+    the implicit solver's sweeps per step (None: its default)."""
     if check_solver(name) == "explicit":
         if iterations is not None:
             raise InvalidInput("iterations apply to the implicit solver only")
         return SolverExplicit(model, collision=collision, air=air)
-    if collision is not None:
-        collision = replace(collision, crossing_guard=True)
+    collision = large_step_collision(collision)
     if iterations is None:
         return SolverImplicit(model, collision=collision, air=air)
     return SolverImplicit(model, collision=collision, air=air, iterations=iterations)
