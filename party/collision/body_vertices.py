@@ -19,6 +19,7 @@ import warp as wp
 
 from .body import EDGE_TOLERANCE
 from .geometry import closest_point_barycentric, interpolate
+from .nearest import keep_nearest
 
 GAP = 0.25
 """The clearance kept between a body vertex and the cloth over it, as a fraction of eps: enough
@@ -86,20 +87,7 @@ def gather_body_vertices(
         dist = wp.length(body_q[p] - interpolate(w, x[a], x[b], x[c]))
         if dist > reach + wp.length(body_qd[p]) * dt:
             continue
-        slot = count
-        if count < MAX_VERTICES:
-            count += 1
-        else:
-            wp.atomic_add(overflow, 0, 1)
-            slot = int(-1)
-            worst = dist
-            for s in range(MAX_VERTICES):
-                if out_distance[t, s] > worst:
-                    worst = out_distance[t, s]
-                    slot = s
-        if slot >= 0:
-            out[t, slot] = p
-            out_distance[t, slot] = dist
+        count = keep_nearest(t, p, dist, count, MAX_VERTICES, out, out_distance, overflow)
     out_count[t] = count
 
 

@@ -6,6 +6,7 @@ import warp as wp
 
 from .geometry import boxes_overlap, closest_point_barycentric, interpolate, step_box
 from .intervals import IntervalLists, first_visit, query_axis
+from .nearest import keep_nearest
 
 MAX_CONTACTS = 4
 """Cloth-cloth contacts kept per node (the nearest ones)."""
@@ -56,21 +57,7 @@ def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), v: w
     step = wp.max(wp.length(v[ta]), wp.max(wp.length(v[tb]), wp.length(v[tc]))) * dt
     if dist > reach + step:
         return count
-    slot = count
-    if count < MAX_CANDIDATES:
-        count += 1
-    else:
-        wp.atomic_add(overflow, 0, 1)
-        slot = int(-1)
-        worst = dist
-        for s in range(MAX_CANDIDATES):
-            if out_distance[i, s] > worst:
-                worst = out_distance[i, s]
-                slot = s
-    if slot >= 0:
-        out[i, slot] = t
-        out_distance[i, slot] = dist
-    return count
+    return keep_nearest(i, t, dist, count, MAX_CANDIDATES, out, out_distance, overflow)
 
 
 @wp.kernel

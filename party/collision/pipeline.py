@@ -158,8 +158,11 @@ class CollisionPipeline:
                 break
 
     def vertex_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
-        """One pass of cloth triangles against the body's vertices
-        (:mod:`party.collision.body_vertices`) over the candidates of the last search."""
+        """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)
+        over the candidates of the last search, at the start of every pass, so that the pass's
+        cloth responses carry a push on to the layers above and its body pass has the last word
+        for every node. (Once per Collision() only, before the passes, the reference dress took
+        8 s of draping to come to rest instead of 4.)"""
         if not self.has_body_vertices:
             return
         m = self.model
@@ -201,13 +204,14 @@ class CollisionPipeline:
                          [x, v, m.node_inv_mass, m.node_thickness, structure, dt, half, self.body_faces,
                           self.body_face_count, self._overflow], dev)
         if self.has_body_vertices:
-            wp.launch(vertex_boxes, dim=len(state.collider_q),
-                      inputs=[state.collider_q, state.collider_qd, dt, half, self._vertex_lower, self._vertex_upper],
-                      device=dev)
-            if self._vertex_tree is None:
-                self._vertex_tree = wp.Bvh(self._vertex_lower, self._vertex_upper)
-            elif self.body_moving:
-                self._vertex_tree.refit()
+            if self._vertex_tree is None or self.body_moving:
+                wp.launch(vertex_boxes, dim=len(state.collider_q),
+                          inputs=[state.collider_q, state.collider_qd, dt, half, self._vertex_lower,
+                                  self._vertex_upper], device=dev)
+                if self._vertex_tree is None:
+                    self._vertex_tree = wp.Bvh(self._vertex_lower, self._vertex_upper)
+                else:
+                    self._vertex_tree.refit()
             launch_items(gather_body_vertices, 0, m.triangle_count,
                          [x, v, m.node_thickness, m.triangle_nodes, self._vertex_tree.id, state.collider_q,
                           state.collider_qd, dt, half, self.body_vertices, self.body_vertex_count,
