@@ -18,7 +18,7 @@ eqs. (13)-(14)).
 import warp as wp
 
 from .body import EDGE_TOLERANCE
-from .geometry import closest_point_barycentric, interpolate
+from .geometry import closest_point_barycentric, interpolate, triangle_step
 from .nearest import keep_nearest
 
 GAP = 0.25
@@ -42,11 +42,6 @@ def vertex_boxes(points: wp.array(dtype=wp.vec3), velocities: wp.array(dtype=wp.
     q = p + velocities[i] * dt
     lower[i] = wp.min(p, q) - wp.vec3(margin)
     upper[i] = wp.max(p, q) + wp.vec3(margin)
-
-
-@wp.func
-def triangle_step(a: int, b: int, c: int, v: wp.array(dtype=wp.vec3), dt: float) -> float:
-    return wp.max(wp.length(v[a]), wp.max(wp.length(v[b]), wp.length(v[c]))) * dt
 
 
 @wp.kernel

@@ -4,7 +4,7 @@ barycentric weights."""
 
 import warp as wp
 
-from .geometry import boxes_overlap, closest_point_barycentric, interpolate, step_box
+from .geometry import boxes_overlap, closest_point_barycentric, interpolate, step_box, triangle_step
 from .intervals import IntervalLists, first_visit, query_axis
 from .nearest import keep_nearest
 
@@ -54,8 +54,7 @@ def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), v: w
         return count
     w = closest_point_barycentric(x0, x[ta], x[tb], x[tc])
     dist = wp.length(x0 - interpolate(w, x[ta], x[tb], x[tc]))
-    step = wp.max(wp.length(v[ta]), wp.max(wp.length(v[tb]), wp.length(v[tc]))) * dt
-    if dist > reach + step:
+    if dist > reach + triangle_step(ta, tb, tc, v, dt):
         return count
     return keep_nearest(i, t, dist, count, MAX_CANDIDATES, out, out_distance, overflow)
 

@@ -48,6 +48,12 @@ def interpolate(w: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> wp.vec3:
 
 
 @wp.func
+def triangle_step(a: int, b: int, c: int, v: wp.array(dtype=wp.vec3), dt: float) -> float:
+    """The longest step [m] of triangle (a, b, c)'s nodes at velocities ``v`` over ``dt``."""
+    return wp.max(wp.length(v[a]), wp.max(wp.length(v[b]), wp.length(v[c]))) * dt
+
+
+@wp.func
 def step_box(x0: wp.vec3, step: wp.vec3, pad: float):
     """The box spanned by a node's step from ``x0`` to ``x0 + step``, grown by ``pad`` [m]
     (section 6.1's search box): returns (lower, upper)."""
