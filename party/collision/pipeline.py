@@ -161,8 +161,8 @@ class CollisionPipeline:
         """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)
         over the candidates of the last search, at the start of every pass, so that the pass's
         cloth responses carry a push on to the layers above and its body pass has the last word
-        for every node. (Once per Collision() only, before the passes, the reference dress took
-        8 s of draping to come to rest instead of 4.)"""
+        for every node. (Run once per Collision() only, before the passes, the reference dress
+        took 8 s of draping to come to rest instead of 4, in one run.)"""
         if not self.has_body_vertices:
             return
         m = self.model
