@@ -62,3 +62,15 @@ def test_a_body_tip_under_a_triangle_stays_a_thickness_below_it(solver):
     gap = GAP * eps
     assert min(held) >= 0.99 * gap
     assert held[-1] == pytest.approx(gap, abs=0.1 * gap)
+
+
+@pytest.mark.parametrize("height,through", [(0.01, 0), (-0.01, 1)])
+def test_a_body_vertex_is_counted_through_the_cloth_when_the_cloth_lies_behind_it(height, through):
+    """A flat square ``height`` [m] over the cone's tip (the other vertices 9 cm and more away,
+    beyond the 2 cm reach): the tip counts only when the cloth lies below it."""
+    from party.output.metrics import body_vertices_through
+
+    net = rectangular_net(0.3, 0.3, 0.05)
+    points = np.c_[net.uv - 0.15, np.full(net.node_count, TIP[2] + height)]
+    cone = collider_from_trimesh(trimesh.creation.cone(radius=0.05, height=0.1, sections=16), "cone")
+    assert body_vertices_through(points, net.triangles, [cone]) == through
