@@ -43,9 +43,10 @@ def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), v: w
                    out: wp.array(dtype=int, ndim=2), out_distance: wp.array(dtype=float, ndim=2),
                    overflow: wp.array(dtype=int)) -> int:
     """Keep triangle t as a candidate of node i unless it holds the node or one of its excluded
-    nodes, or lies farther than ``reach`` (:func:`search_reach`) plus its nodes' longest step: until the next search, node and triangle each move at most half
-    the margin beyond that, so they cannot come within eps. Beyond MAX_CANDIDATES the farthest
-    is replaced. Returns the new count."""
+    nodes, or lies farther than ``reach`` (:func:`search_reach`) plus its nodes' longest step:
+    until the next search, node and triangle each move at most half the margin beyond that, so
+    they cannot come within eps. Beyond MAX_CANDIDATES the farthest is replaced. Returns the
+    new count."""
     ta = tris[t, 0]
     tb = tris[t, 1]
     tc = tris[t, 2]

@@ -107,9 +107,6 @@ class CollisionPipeline:
             self.body_vertices = wp.zeros((t, MAX_VERTICES), dtype=int, device=dev)
             self.body_vertex_count = wp.zeros(t, dtype=int, device=dev)
             self._vertex_distance = wp.zeros((t, MAX_VERTICES), dtype=float, device=dev)
-            self._vertex_dv = wp.zeros(n, dtype=wp.vec3, device=dev)
-            self._vertex_dx = wp.zeros(n, dtype=wp.vec3, device=dev)
-            self._vertex_hits = wp.zeros(n, dtype=int, device=dev)
         if self.has_cloth:
             size = _triangle_size(model.host["points"], model.triangles)
             if self.bvh:
@@ -125,6 +122,8 @@ class CollisionPipeline:
             self.contact_n = wp.zeros((n, MAX_CONTACTS), dtype=wp.vec3, device=dev)
             self.contact_d = wp.zeros((n, MAX_CONTACTS), dtype=float, device=dev)
             self.contact_count = wp.zeros(n, dtype=int, device=dev)
+        if self.has_cloth or self.has_body_vertices:
+            # per-node sums of the responses of one pass, applied and reset after each
             self.dv = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.dx = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.hits = wp.zeros(n, dtype=int, device=dev)
@@ -169,9 +168,9 @@ class CollisionPipeline:
         wp.launch(respond_body_vertices, dim=m.triangle_count,
                   inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
                           state.collider_qd, self.body_vertex_normals, self.body_vertices, self.body_vertex_count, dt,
-                          self._vertex_dv, self._vertex_dx, self._vertex_hits], device=m.device)
+                          self.dv, self.dx, self.hits], device=m.device)
         wp.launch(apply_cloth_response, dim=m.node_count,
-                  inputs=[x, v, self._vertex_dv, self._vertex_dx, self._vertex_hits], device=m.device)
+                  inputs=[x, v, self.dv, self.dx, self.hits], device=m.device)
 
     def body_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """One cloth-body response pass (eqs. 8-12) over the candidates of the last search."""

@@ -41,7 +41,6 @@ from ..output.frames import write_json, write_mesh
 from ..output.garment_export import write_garment
 from ..output.metrics import body_vertices_through, cloth_crossings, max_elongation
 from ..pattern import load_pattern
-from ..collision import CollisionSettings
 from ..model import Model
 from ..solvers.relax import SolverRelax, total_energy
 from ..solvers.settle import Settled, settle
@@ -153,7 +152,8 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
 
 def _drape_to_rest(model: Model, progress: bool) -> tuple[Settled, list[tuple[int, float]]]:
     """Implicit steps: the sewn garment let fall under gravity until its shape is steady (see
-    :data:`STEADY_MEAN`), collisions and the crossing guard on; returns the outcome and the
+    :data:`STEADY_MEAN`), with the implicit solver's collisions (the crossing guard and body
+    vertices on: :func:`~party.solvers.select.large_step_collision`); returns the outcome and the
     energy [J] logged at each check against the step."""
     energy: list[tuple[int, float]] = []
     with relax_progress("draping", int(DRAPE_SECONDS / DRAPE_CHECK), progress) as on_log:
@@ -161,9 +161,9 @@ def _drape_to_rest(model: Model, progress: bool) -> tuple[Settled, list[tuple[in
             energy.append((step, total_energy(model, state.positions())))
             on_log(len(energy), energy[-1][1], state)
 
-        settled = settle(model, "implicit", collision=CollisionSettings(crossing_guard=True), memory=DRAPE_MEMORY,
-                         check_every=DRAPE_CHECK, max_seconds=DRAPE_SECONDS, rest_speed=0.0, steady=_shape_steady,
-                         on_check=on_check, max_speed=DRAPE_MAX_SPEED, iterations=DRAPE_ITERATIONS)
+        settled = settle(model, "implicit", memory=DRAPE_MEMORY, check_every=DRAPE_CHECK, max_seconds=DRAPE_SECONDS,
+                         rest_speed=0.0, steady=_shape_steady, on_check=on_check, max_speed=DRAPE_MAX_SPEED,
+                         iterations=DRAPE_ITERATIONS)
     return settled, energy
 
 
