@@ -9,6 +9,7 @@ from party.model import ModelBuilder
 from party.model.builder import HYSTERESIS_STIFFNESS
 from party.meshing import rectangular_net
 from party.solvers import SolverImplicit
+from party.solvers.implicit.solver import SLIDER_STEP_RATIO
 from party.units import GRAVITY
 from party.validate import cantilever
 
@@ -17,16 +18,19 @@ OVERHANG = 0.6 * cantilever.reference_bending_length(COTTON)  # a small deflecti
 ROOT_MOMENT = COTTON.areal_density * GRAVITY * OVERHANG**2 / 2  # N*m/m
 
 
-def tip_drop(two_hb: float) -> float:
-    shape = cantilever.overhang_shape(COTTON.with_(bending_hysteresis=two_hb), "explicit", OVERHANG, 16)
+def tip_drop(two_hb: float, solver: str = "explicit", segments: int = 16) -> float:
+    shape = cantilever.overhang_shape(COTTON.with_(bending_hysteresis=two_hb), solver, OVERHANG, segments)
     return -shape[-1, 1]
 
 
-def test_moment_below_hb_everywhere_sticks_at_the_jenkins_stiffness():
+@pytest.mark.parametrize("solver,segments", [("explicit", 16), ("implicit", 4)])
+def test_moment_below_hb_everywhere_sticks_at_the_jenkins_stiffness(solver, segments):
     """With HB above the root moment W L^2 / 2 nothing slips: the strip bends as one of
-    rigidity (1 + f) B, i.e. its tip drops 1 / (1 + f) as far (linear beam)."""
-    free = tip_drop(0.0)
-    stuck = tip_drop(2 * 4.0 * ROOT_MOMENT)
+    rigidity (1 + f) B, i.e. its tip drops 1 / (1 + f) as far (linear beam). The implicit
+    solver's 1/300 s step is cut in two here (:data:`SLIDER_STEP_RATIO`); as one step the
+    strip fell 5 times as far."""
+    free = tip_drop(0.0, solver, segments)
+    stuck = tip_drop(2 * 4.0 * ROOT_MOMENT, solver, segments)
     assert stuck / free == pytest.approx(1.0 / (1.0 + HYSTERESIS_STIFFNESS), rel=0.02)
 
 
@@ -36,12 +40,26 @@ def test_small_hysteresis_slips_and_bends_nearly_as_far():
     assert 0.9 * free < slipping < free
 
 
-def test_implicit_solver_refuses_hysteresis():
-    net = rectangular_net(0.05, 0.05, 0.01)
-    b = ModelBuilder()
-    b.add_cloth(net, COTTON.with_(bending_hysteresis=1e-4), np.c_[net.uv, np.zeros(net.node_count)])
-    with pytest.raises(InvalidInput, match="^bending hysteresis .* explicit solver only; use --solver explicit$"):
-        SolverImplicit(b.finalize("cpu"))
+@pytest.mark.parametrize("spacing", [0.01, 0.003, 0.001])
+def test_implicit_substeps_keep_the_sliders_bending_within_the_ratio(spacing):
+    """The fewest substeps whose bending stiffness over inertia at the sliders' nodes is at
+    most SLIDER_STEP_RATIO; a fabric without hysteresis is never cut."""
+    net = rectangular_net(0.05, 0.05, spacing)
+    dt = 1.0 / 300.0
+    steps = {}
+    for two_hb in (0.0, 1e-4):
+        b = ModelBuilder()
+        b.add_cloth(net, COTTON.with_(bending_hysteresis=two_hb), np.c_[net.uv, np.zeros(net.node_count)])
+        model = b.finalize("cpu")
+        steps[two_hb] = SolverImplicit(model, collision=None).substeps(dt)
+    h = model.host
+    diagonal = model.bending_matrix(friction=False).diagonal()
+    sliders = np.unique(h["hinge_nodes"][h["hinge_friction"] > 0.0])
+    ratio = float(np.max(diagonal[sliders] / h["mass"][sliders])) * dt**2
+    count = steps[1e-4]
+    assert steps[0.0] == 1
+    assert ratio / count**2 <= SLIDER_STEP_RATIO
+    assert count == 1 or ratio / (count - 1) ** 2 > SLIDER_STEP_RATIO
 
 
 def test_hysteresis_needs_bending_rigidity():

@@ -126,16 +126,16 @@ class Model:
             kinematic_velocity=wp.zeros(self.node_count, dtype=wp.vec3, device=self.device),
         )
 
-    def bending_matrix(self):
+    def bending_matrix(self, *, friction: bool = True):
         """L = sum_h stiffness_h K_h K_h^T [N/m], the constant matrix of the bending stencils'
-        quadratic energy x^T L x / 2 (per coordinate; :mod:`party.meshing.hinges`), the
-        bending hysteresis's sticking stiffness included, as a
-        scipy CSR matrix with sorted rows."""
+        quadratic energy x^T L x / 2 (per coordinate; :mod:`party.meshing.hinges`), with the
+        bending hysteresis's sticking stiffness unless ``friction`` is False, as a scipy CSR
+        matrix with sorted rows."""
         import scipy.sparse as sp
 
         h = self.host
         nodes, weights = h["hinge_nodes"], h["hinge_weights"]
-        stiffness = h["hinge_stiffness"] + h["hinge_friction"]
+        stiffness = h["hinge_stiffness"] + (h["hinge_friction"] if friction else 0.0)
         rows = np.repeat(nodes, 4, axis=1).ravel()
         cols = np.tile(nodes, (1, 4)).ravel()
         values = (stiffness[:, None, None] * weights[:, :, None] * weights[:, None, :]).ravel()

@@ -9,15 +9,13 @@ slips, dragging c_slip along so that the moment stays at HB per unit width. Unde
 the moment traces Kawabata's bilinear loop of width 2HB; at rest the cloth holds any shape
 where its bending moment lies within HB of equilibrium.
 
-The stiffness f k is part of ``Model.bending_matrix()`` (both solvers treat it with the
-bending); what the slip adds is a constant force per step, f k K_i c_slip on node i, added
-here to the step's external forces. c_slip is kept in the stencil's own frame (along its
-thread, its normal, across) so that it turns with the cloth.
-
-Explicit solver only. The implicit solver's sweeps, cut short on a finely meshed strip, leave
-kinks of a node's fall in the first steps; the slider takes them for bending beyond its limit,
-keeps them as set, and its lagged forces then grew without bound (seen on a 0.6 mm strip at
-1/300 s). The implicit solver refuses such fabrics with a one-line error.
+c_slip is kept in the stencil's own frame (along its thread, its normal, across) so that it
+turns with the cloth, and is updated after each step from the step's end (:func:`update_slip`).
+The explicit solver takes the stiffness f k with the bending (``Model.bending_matrix()``) and
+the slip as a constant force per step, f k K_i c_slip on node i (:func:`slip_forces`). The
+implicit solver takes the element into its solve (:func:`slider_moment`, the Huber energy
+of backward Euler's return mapping with c_slip at the step's start): a force lagged by a
+large step fed back on itself and grew without bound.
 """
 
 from __future__ import annotations
@@ -60,6 +58,32 @@ def slip_forces(
     c_slip = wp.transpose(stencil_frame(x, n)) * slip[h]
     for c in range(4):
         wp.atomic_add(f, n[c], s * w[c] * c_slip)
+
+
+@wp.kernel
+def slip_in_world(
+    x: wp.array(dtype=wp.vec3),
+    hinge_nodes: wp.array(dtype=wp.vec4i),
+    hinge_friction: wp.array(dtype=float),
+    slip: wp.array(dtype=wp.vec3),
+    slip_world: wp.array(dtype=wp.vec3),
+):
+    """c_slip turned from the stencil's frame at ``x`` into the world frame [1/m]."""
+    h = wp.tid()
+    if hinge_friction[h] > 0.0:
+        slip_world[h] = wp.transpose(stencil_frame(x, hinge_nodes[h])) * slip[h]
+
+
+@wp.func
+def slider_moment(curvature: wp.vec3, c_slip: wp.vec3, friction: float, limit: float) -> wp.vec3:
+    """The Jenkins element's generalized force with its slider returned to the limit:
+    friction (k - c_slip) while that stays within ``limit``, else ``limit`` along it
+    (the gradient of a Huber energy of k, convex, whose curvature is at most ``friction``)."""
+    moment = friction * (curvature - c_slip)
+    size = wp.length(moment)
+    if size > limit:
+        moment = moment * (limit / size)
+    return moment
 
 
 @wp.kernel

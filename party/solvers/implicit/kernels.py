@@ -3,6 +3,9 @@ potential (Chen, Macklin, Macklin, Yuksel, Kim: "Vertex Block Descent", SIGGRAPH
 
 import warp as wp
 
+from ..explicit.kernels import stencil_curvature
+from ..hysteresis import slider_moment
+
 
 @wp.kernel
 def inertial_target(
@@ -106,6 +109,13 @@ def block_descent(
     inv_rest: wp.array(dtype=wp.mat22),
     membrane_area: wp.array(dtype=float),
     membrane_c: wp.array(dtype=wp.mat33),
+    slider_offsets: wp.array(dtype=int),
+    slider_slots: wp.array(dtype=int),
+    hinge_nodes: wp.array(dtype=wp.vec4i),
+    hinge_weights: wp.array(dtype=wp.vec4),
+    hinge_friction: wp.array(dtype=float),
+    hinge_slip_limit: wp.array(dtype=float),
+    slip_world: wp.array(dtype=wp.vec3),
     dt: float,
     x: wp.array(dtype=wp.vec3),
 ):
@@ -121,7 +131,10 @@ def block_descent(
     quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h K_h K_h^T
     (``bend_*``: row i of L, its diagonal included), so they add (L x)_i to the gradient and
     L_ii I to the Hessian. Membrane triangles add their St. Venant-Kirchhoff terms
-    (:func:`membrane_gradient`).
+    (:func:`membrane_gradient`). Bending hysteresis's elements (``slider_*``: each node's
+    stencils with a slider, entries stencil * 4 + the node's corner) add K_i times their
+    returned moment (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the
+    step's start in ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
     """
     i = colored[first + wp.tid()]
     if inv_mass[i] == 0.0:
@@ -161,6 +174,14 @@ def block_descent(
             g = membrane_gradient(x, tris, inv_rest[t], membrane_c[t], t, slot - 3 * t)
             grad += area * g.force
             hess += area * g.hessian
+    for j in range(slider_offsets[i], slider_offsets[i + 1]):
+        slot = slider_slots[j]
+        h = slot // 4
+        weight = hinge_weights[h][slot - 4 * h]
+        friction = hinge_friction[h]
+        curvature = stencil_curvature(x, hinge_nodes[h], hinge_weights[h])
+        grad += weight * slider_moment(curvature, slip_world[h], friction, hinge_slip_limit[h])
+        diagonal += friction * weight * weight
     hess += diagonal * wp.identity(n=3, dtype=float)
     det = wp.determinant(hess)
     if det > 1.0e-20:
