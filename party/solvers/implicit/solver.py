@@ -141,7 +141,7 @@ class SolverImplicit:
                control.kinematic_velocity.ptr, float(dt))
         graph = self._graphs.get(key)
         if graph is None and self._capture:
-            if len(self._graphs) >= 4:
+            if len(self._graphs) >= 8:  # state pairs: two swapped states, and a scratch one for substeps
                 self._graphs.clear()
             try:
                 with wp.ScopedCapture(device=m.device) as capture:
