@@ -63,7 +63,7 @@ def test_sample_drapes_on_mean_all_closed_and_clean(path, tmp_path):
     _assert_closed_and_clean(summary)
 
 
-@pytest.mark.parametrize("name", ["dress_sleeves_flare", "hoody_mean", "dress_pencil"])
+@pytest.mark.parametrize("name", ["dress_sleeves_flare", "hoody_mean", "dress_pencil", "js_mean_all"])
 def test_sample_drapes_closed_and_clean_with_the_implicit_solver(name, tmp_path):
     # draping in 1/300 s steps needs the crossing guard (the flare dress: 21 crossings without
     # it), checking every edge (the hoody: 2 crossings when only edges near cloth were checked)
