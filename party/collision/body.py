@@ -14,6 +14,13 @@ MAX_FACES = 24
 """Body triangles remembered per node between interval-list queries."""
 
 
+@wp.func
+def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float) -> bool:
+    """Whether a node at ``x`` stepping ``v dt`` stays within ``margin`` [m] of ``ref``, the
+    place its candidates were searched from (``margin`` is half the search margin)."""
+    return wp.length(x - ref) + wp.length(v) * dt <= margin
+
+
 @wp.kernel
 def gather_body_faces(
     first: int,
@@ -24,14 +31,21 @@ def gather_body_faces(
     lists: IntervalLists,
     dt: float,
     margin: float,
+    everything: int,
+    ref: wp.array(dtype=wp.vec3),
     faces_out: wp.array(dtype=int, ndim=2),
     face_count: wp.array(dtype=int),
     overflow: wp.array(dtype=int),
 ):
     """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
     lets the answer serve the next steps, walked on the axis with n = min(n_x, n_y, n_z) list
-    entries and box-checked in 3-D. The triangles found are kept for the narrow phase."""
+    entries and box-checked in 3-D. The triangles found are kept for the narrow phase, and r
+    in ``ref``. With ``everything`` 0 only nodes whose step leaves ``margin`` of ``ref`` search
+    again (the body must be static then)."""
     i = first + wp.tid()
+    if everything == 0 and still_covered(x[i], v[i], ref[i], dt, margin):
+        return
+    ref[i] = x[i]
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return
@@ -66,6 +80,8 @@ def gather_body_faces_bvh(
     bvh: wp.uint64,
     dt: float,
     margin: float,
+    everything: int,
+    ref: wp.array(dtype=wp.vec3),
     faces_out: wp.array(dtype=int, ndim=2),
     face_count: wp.array(dtype=int),
     overflow: wp.array(dtype=int),
@@ -73,6 +89,9 @@ def gather_body_faces_bvh(
     """:func:`gather_body_faces` with a BVH (:mod:`party.collision.bvh`) in place of the
     interval lists: the same box, the same triangles."""
     i = first + wp.tid()
+    if everything == 0 and still_covered(x[i], v[i], ref[i], dt, margin):
+        return
+    ref[i] = x[i]
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return
