@@ -192,18 +192,38 @@ def test_guard_and_collision_give_the_same_on_one_thread_and_on_several(monkeypa
     assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][2], runs[1][2])
 
 
-def test_crossing_guard_rechecking_only_around_reverted_nodes_finds_what_a_full_recheck_finds(monkeypatch):
-    """After a revert the guard rechecks only the edges with a node sent back and those near a
-    triangle with one; on the falling strips (15 rechecks) that reverts the same nodes and ends
-    bit for bit where rechecking every edge does."""
-    from party.collision.crossing_guard import CrossingGuard
+@pytest.mark.parametrize("room,hot_share,reach", [(1, 0.01, 8e-3), (16, 0.01, 8e-3), (16, 1.0, 2e-3)])
+def test_crossing_guard_testing_listed_triangles_finds_what_a_search_at_every_check_finds(monkeypatch, room,
+                                                                                         hot_share, reach):
+    """The guard tests each edge against the triangles listed near it, and the edges and
+    triangles at nodes that have moved half the lists' reach against everything near them,
+    listing anew once too many nodes have: on the falling strips that reverts the same nodes
+    and ends bit for bit where a search at every check does, with fewer searches; also where
+    the lists start with room for one triangle and must grow, and where they are never made
+    anew and reach 2 mm, less than the strips' first distance (every crossing found by
+    searching around the moving nodes)."""
+    import party.collision.crossing_guard as guard
 
-    partial_counts, partial = crossing_strips(guard=True)
-    monkeypatch.setattr(CrossingGuard, "_recheck", lambda self, x: self._check(x))
-    full_counts, full = crossing_strips(guard=True)
-    assert partial.end.guard.reverts == full.end.guard.reverts > 0
-    assert np.array_equal(partial_counts, full_counts) and partial_counts.max() == 0
-    assert np.array_equal(partial.final_points, full.final_points)
+    monkeypatch.setattr(guard, "NEAR_ROOM", room)
+    monkeypatch.setattr(guard, "HOT_SHARE", hot_share)
+    monkeypatch.setattr(guard, "NEAR_REACH", reach)
+    listed_counts, listed = crossing_strips(guard=True)
+    check = guard.CrossingGuard._check
+
+    def search_at_every_check(self, x):
+        self._listed = False
+        return check(self, x)
+
+    monkeypatch.setattr(guard.CrossingGuard, "_check", search_at_every_check)
+    searched_counts, searched = crossing_strips(guard=True)
+    assert listed.end.guard.searches < searched.end.guard.searches
+    assert listed.end.guard.reverts == searched.end.guard.reverts > 0
+    assert np.array_equal(listed_counts, searched_counts) and listed_counts.max() == 0
+    assert np.array_equal(listed.final_points, searched.final_points)
+    if room == 1:
+        assert listed.end.guard.near.shape[1] > 1
+    if hot_share == 1.0:
+        assert listed.end.guard.searches == 1
 
 
 def test_crossing_guard_stops_edges_piercing_between_nodes():

@@ -125,3 +125,51 @@ def edge_pierces_triangle(i: int, k: int, t: int, points: wp.array(dtype=wp.vec3
         return False
     return segment_hits_triangle(points[i], points[k], points[a], points[b], points[c])
 
+
+
+@wp.func
+def segment_segment_distance(p1: wp.vec3, q1: wp.vec3, p2: wp.vec3, q2: wp.vec3) -> float:
+    """Smallest distance between segments p1q1 and p2q2 (Ericson, Real-Time Collision
+    Detection, 5.1.9)."""
+    d1 = q1 - p1
+    d2 = q2 - p2
+    r = p1 - p2
+    a = wp.dot(d1, d1)
+    e = wp.dot(d2, d2)
+    f = wp.dot(d2, r)
+    s = float(0.0)
+    t = float(0.0)
+    if a <= 1.0e-20 and e <= 1.0e-20:
+        return wp.length(r)
+    if a <= 1.0e-20:
+        t = wp.clamp(f / e, 0.0, 1.0)
+    else:
+        c = wp.dot(d1, r)
+        if e <= 1.0e-20:
+            s = wp.clamp(-c / a, 0.0, 1.0)
+        else:
+            b = wp.dot(d1, d2)
+            denom = a * e - b * b
+            if denom > 1.0e-20:
+                s = wp.clamp((b * f - c * e) / denom, 0.0, 1.0)
+            t = (b * s + f) / e
+            if t < 0.0:
+                t = 0.0
+                s = wp.clamp(-c / a, 0.0, 1.0)
+            elif t > 1.0:
+                t = 1.0
+                s = wp.clamp((b - c) / a, 0.0, 1.0)
+    return wp.length(p1 + d1 * s - (p2 + d2 * t))
+
+
+@wp.func
+def segment_triangle_distance(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> float:
+    """Smallest distance between segment pq and triangle abc (zero where the segment passes
+    through it)."""
+    if segment_hits_triangle(p, q, a, b, c):
+        return 0.0
+    d = wp.min(wp.length(p - interpolate(closest_point_barycentric(p, a, b, c), a, b, c)),
+               wp.length(q - interpolate(closest_point_barycentric(q, a, b, c), a, b, c)))
+    d = wp.min(d, segment_segment_distance(p, q, a, b))
+    d = wp.min(d, segment_segment_distance(p, q, b, c))
+    return wp.min(d, segment_segment_distance(p, q, c, a))
