@@ -30,7 +30,7 @@ import warp as wp
 from ..launch import launch_items
 from ..model import Model
 from ..meshing.net import triangle_edges
-from .geometry import segment_hits_triangle, segment_triangle_distance
+from .geometry import edge_pierces_triangle, edge_shares_node, segment_hits_triangle, segment_triangle_distance
 
 MAX_SPREAD = 32
 """Rounds of growing the reverted nodes over stretched elements (:meth:`CrossingGuard._spread`)."""
@@ -50,14 +50,6 @@ searched at every check."""
 MAX_ROUNDS = 16
 """Rounds of check-and-revert per step; a round reverts every pair found, so a step needs
 more than a few only when many layers pile up at once."""
-
-
-@wp.func
-def _shares_node(i: int, k: int, t: int, tris: wp.array(dtype=int, ndim=2)) -> bool:
-    a = tris[t, 0]
-    b = tris[t, 1]
-    c = tris[t, 2]
-    return a == i or a == k or b == i or b == k or c == i or c == k
 
 
 @wp.func
@@ -99,7 +91,7 @@ def _list_and_check_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp
         a = tris[t, 0]
         b = tris[t, 1]
         c = tris[t, 2]
-        if _shares_node(i, k, t, tris):
+        if edge_shares_node(i, k, t, tris):
             continue
         if segment_triangle_distance(points[i], points[k], points[a], points[b], points[c]) > reach:
             continue
@@ -130,8 +122,7 @@ def _check_listed_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp.v
         query = wp.mesh_query_aabb(mesh, wp.min(points[i], points[k]), wp.max(points[i], points[k]))
         t = int(0)
         while wp.mesh_query_aabb_next(query, t):
-            if not _shares_node(i, k, t, tris) and segment_hits_triangle(
-                    points[i], points[k], points[tris[t, 0]], points[tris[t, 1]], points[tris[t, 2]]):
+            if edge_pierces_triangle(i, k, t, points, tris):
                 _mark_crossing(e, i, k, t, tris, crossed_before, crossed_now, revert, found)
         return
     for j in range(wp.min(near_count[e], near.shape[1])):
@@ -160,9 +151,7 @@ def _check_hot_triangles(first: int, edge_tree: wp.uint64, points: wp.array(dtyp
     while wp.bvh_query_next(query, e):
         i = edges[e][0]
         k = edges[e][1]
-        if hot[i] != 0 or hot[k] != 0 or _shares_node(i, k, t, tris):
-            continue
-        if segment_hits_triangle(points[i], points[k], points[a], points[b], points[c]):
+        if hot[i] == 0 and hot[k] == 0 and edge_pierces_triangle(i, k, t, points, tris):
             _mark_crossing(e, i, k, t, tris, crossed_before, crossed_now, revert, found)
 
 

@@ -114,17 +114,22 @@ def segment_hits_triangle(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.
 
 
 @wp.func
+def edge_shares_node(i: int, k: int, t: int, tris: wp.array(dtype=int, ndim=2)) -> bool:
+    """Whether mesh edge (i, k) and triangle t share a node."""
+    a = tris[t, 0]
+    b = tris[t, 1]
+    c = tris[t, 2]
+    return a == i or a == k or b == i or b == k or c == i or c == k
+
+
+@wp.func
 def edge_pierces_triangle(i: int, k: int, t: int, points: wp.array(dtype=wp.vec3),
                           tris: wp.array(dtype=int, ndim=2)) -> bool:
     """Whether mesh edge (i, k) passes through cloth triangle t; a triangle sharing a node with
     the edge never counts."""
-    a = tris[t, 0]
-    b = tris[t, 1]
-    c = tris[t, 2]
-    if a == i or a == k or b == i or b == k or c == i or c == k:
+    if edge_shares_node(i, k, t, tris):
         return False
-    return segment_hits_triangle(points[i], points[k], points[a], points[b], points[c])
-
+    return segment_hits_triangle(points[i], points[k], points[tris[t, 0]], points[tris[t, 1]], points[tris[t, 2]])
 
 
 @wp.func
