@@ -93,14 +93,16 @@ def _list_and_check_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp
         c = tris[t, 2]
         if edge_shares_node(i, k, t, tris):
             continue
-        if segment_triangle_distance(points[i], points[k], points[a], points[b], points[c]) > reach:
+        distance = segment_triangle_distance(points[i], points[k], points[a], points[b], points[c])
+        if distance > reach:
             continue
         if count < room:
             near[e, count] = t
         else:
             overflow[0] = 1
         count += 1
-        if segment_hits_triangle(points[i], points[k], points[a], points[b], points[c]):
+        # the distance is zero where the edge passes through (and where it only touches)
+        if distance == 0.0 and segment_hits_triangle(points[i], points[k], points[a], points[b], points[c]):
             _mark_crossing(e, i, k, t, tris, crossed_before, crossed_now, revert, found)
     near_count[e] = count
 

@@ -202,7 +202,6 @@ class CollisionPipeline:
         everything = int(self.body_moving or not self._body_built)
         if everything:
             self.searches += 1
-        if self.body_moving or not self._body_built:
             if self.bvh:
                 self.body_tree.build(state.collider_q, state.collider_qd, dt, 0.0)
             else:
