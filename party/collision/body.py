@@ -3,7 +3,7 @@ response of eqs. (8)-(12)."""
 
 import warp as wp
 
-from .geometry import boxes_overlap, closest_point_barycentric, friction_restitution_response, interpolate, step_box
+from .geometry import boxes_overlap, closest_point_barycentric, differs, friction_restitution_response, interpolate, step_box
 from .intervals import IntervalLists, first_visit, query_axis
 
 EDGE_TOLERANCE = 0.25
@@ -126,6 +126,8 @@ def collide_body(
     candidate_count: wp.array(dtype=int),
     dt: float,
     contacts: wp.array(dtype=int),
+    settled: wp.array(dtype=int),
+    touched: wp.array(dtype=int),
 ):
     """One detection-and-response pass for each free node over its candidate triangles.
 
@@ -136,9 +138,12 @@ def collide_body(
     normals, smooth except across creases) and the body velocity at p. Eqs. (8)-(12) give the new velocity; if the step would
     still end closer than eps to the triangle, the node's start is moved out along the face
     normal so that the step ends at eps (a position correction, adding no velocity).
+
+    Skips a node left ``settled`` by the last pass and not ``touched`` by this one (see
+    :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes.
     """
     i = first + wp.tid()
-    if inv_mass[i] == 0.0:
+    if inv_mass[i] == 0.0 or (settled[i] == 1 and touched[i] == 0):
         return
     x0 = x[i]
     vi = v[i]
@@ -190,5 +195,8 @@ def collide_body(
     s_end = wp.dot(x0 - a, nf) + wp.dot(vnew - vbody, nf) * dt
     if s_end < eps:
         x[i] = x0 + (eps - s_end) * nf
+        touched[i] = 1
+    if differs(vnew, vi):
+        touched[i] = 1
     v[i] = vnew
     contacts[i] = 1

@@ -111,6 +111,7 @@ def respond_body_vertices(
     candidates: wp.array(dtype=int, ndim=2),
     candidate_count: wp.array(dtype=int),
     dt: float,
+    settled: wp.array(dtype=int),
     dv: wp.array(dtype=wp.vec3),
     dx: wp.array(dtype=wp.vec3),
     hits: wp.array(dtype=int),
@@ -120,11 +121,14 @@ def respond_body_vertices(
     triangle (off it sideways by no more than the body response's tolerance,
     :data:`~party.collision.body.EDGE_TOLERANCE` eps) and no deeper than eps behind the vertex:
     stop the point's approach and move its start out so that the step ends at the gap,
-    accumulated into ``dv``, ``dx``, ``hits``."""
+    accumulated into ``dv``, ``dx``, ``hits``. Skips a triangle whose nodes the last pass left
+    ``settled`` (see :meth:`~party.collision.pipeline.CollisionPipeline.apply`)."""
     t = wp.tid()
     a = tris[t, 0]
     b = tris[t, 1]
     c = tris[t, 2]
+    if settled[a] == 1 and settled[b] == 1 and settled[c] == 1:
+        return
     eps = wp.max(thickness[a], wp.max(thickness[b], thickness[c]))
     gap = GAP * eps
     face = wp.cross(x[b] - x[a], x[c] - x[a])

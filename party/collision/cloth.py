@@ -211,6 +211,12 @@ def exchange(v0: wp.vec3, v1: wp.vec3, gamma: float, kappa: float) -> wp.vec3:
     return v1 + kappa * gamma * (v0 - v1)
 
 
+@wp.func
+def unchanged(i: int, settled: wp.array(dtype=int), touched: wp.array(dtype=int)) -> bool:
+    """Node i was left as it was by the last pass of Collision() and so far by this one."""
+    return settled[i] == 1 and touched[i] == 0
+
+
 @wp.kernel
 def respond_cloth(
     x: wp.array(dtype=wp.vec3),
@@ -225,6 +231,8 @@ def respond_cloth(
     contact_n: wp.array(dtype=wp.vec3, ndim=2),
     contact_count: wp.array(dtype=int),
     dt: float,
+    settled: wp.array(dtype=int),
+    touched: wp.array(dtype=int),
     dv: wp.array(dtype=wp.vec3),
     dx: wp.array(dtype=wp.vec3),
     hits: wp.array(dtype=int),
@@ -238,7 +246,9 @@ def respond_cloth(
     that change. If the pair would still close the gap after the exchange (gamma > 1/2), the
     remaining normal approach is removed, split by inverse mass; a gap already under eps is
     reopened by a position correction. The gap is measured anew each pass along the normal
-    found at detection (the side the node was on at the start of the step).
+    found at detection (the side the node was on at the start of the step). A contact whose
+    nodes the last pass left ``settled`` and this one has not ``touched`` is skipped (see
+    :meth:`~party.collision.pipeline.CollisionPipeline.apply`).
     """
     i, s = wp.tid()
     if s >= contact_count[i]:
@@ -250,6 +260,9 @@ def respond_cloth(
     ta = tris[t, 0]
     tb = tris[t, 1]
     tc = tris[t, 2]
+    if (unchanged(i, settled, touched) and unchanged(ta, settled, touched) and unchanged(tb, settled, touched)
+            and unchanged(tc, settled, touched)):
+        return
     d = wp.dot(x[i] - interpolate(w, x[ta], x[tb], x[tc]), n)
     v0 = v[i]
     v1 = interpolate(w, v[ta], v[tb], v[tc])
@@ -301,14 +314,18 @@ def apply_cloth_response(
     dv: wp.array(dtype=wp.vec3),
     dx: wp.array(dtype=wp.vec3),
     hits: wp.array(dtype=int),
+    touched: wp.array(dtype=int),
 ):
-    """Average each node's accumulated corrections over its contacts, apply, and reset."""
+    """Average each node's accumulated corrections over its contacts, apply, and reset;
+    mark the nodes that had any as ``touched`` (even where a correction too small to change
+    a float was all they had: it still counts in the average)."""
     i = wp.tid()
     h = hits[i]
     if h > 0:
         scale = 1.0 / float(h)
         v[i] = v[i] + dv[i] * scale
         x[i] = x[i] + dx[i] * scale
+        touched[i] = 1
         dv[i] = wp.vec3(0.0)
         dx[i] = wp.vec3(0.0)
         hits[i] = 0

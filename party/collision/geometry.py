@@ -178,3 +178,9 @@ def segment_triangle_distance(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c:
     d = wp.min(d, segment_segment_distance(p, q, a, b))
     d = wp.min(d, segment_segment_distance(p, q, b, c))
     return wp.min(d, segment_segment_distance(p, q, c, a))
+
+
+@wp.func
+def differs(a: wp.vec3, b: wp.vec3) -> bool:
+    """a and b differ in any component (bitwise for finite values)."""
+    return a[0] != b[0] or a[1] != b[1] or a[2] != b[2]

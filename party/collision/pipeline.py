@@ -66,6 +66,17 @@ class CollisionSettings:
             raise InvalidInput(f"unknown broad phase {self.broad_phase!r}; known: intervals, bvh")
 
 
+@wp.kernel
+def close_pass(touched: wp.array(dtype=int), settled: wp.array(dtype=int), changed: wp.array(dtype=int)):
+    """After a pass of Collision(): the nodes it left as they were are ``settled`` for the
+    next; count those it changed and clear ``touched``."""
+    i = wp.tid()
+    settled[i] = 1 - touched[i]
+    if touched[i] == 1:
+        wp.atomic_add(changed, 0, 1)
+    touched[i] = 0
+
+
 class CollisionPipeline:
     """Filters a step's velocities (and start positions) so that no node enters a body or
     crosses a cloth layer: ``v(t+dt) = Collision(v*)`` of eq. (5)."""
@@ -81,6 +92,9 @@ class CollisionPipeline:
         self.margin = float(settings.search_margin)
         self.bvh = settings.broad_phase == "bvh"
         self.contacts = wp.zeros(n, dtype=int, device=dev)
+        self._touched = wp.zeros(n, dtype=int, device=dev)
+        self._settled = wp.zeros(n, dtype=int, device=dev)
+        self._changed = wp.zeros(1, dtype=int, device=dev)
         self.searches = 0
         self._flag = wp.ones(1, dtype=int, device=dev)
         self._overflow = wp.zeros(1, dtype=int, device=dev)
@@ -137,7 +151,15 @@ class CollisionPipeline:
         that may have left the region searched for it last time, and that of the cloth's
         triangles, for every node, once some node may have (this reads one flag from the
         device); ``search=False`` reuses the last searches' candidates (a second pass within one
-        step)."""
+        step).
+
+        Each pass after the first leaves out what the last pass left as it was: a cloth triangle
+        against the body's vertices whose nodes it did not change, a cloth contact none of whose
+        nodes it or this pass has changed so far, a node's body response where neither has. On
+        the same positions and velocities they would compute what they computed in the last
+        pass, which changed nothing, so the result is bit for bit that of full passes; once a
+        pass changes nothing, the passes stop. (After the first pass of the reference dress's
+        steps about 100 of its 3,312 nodes still change.)"""
         m = self.model
         dev = m.device
         if search and self.has_body:
@@ -150,17 +172,25 @@ class CollisionPipeline:
             launch_items(detect_cloth, 0, m.node_count,
                          [x, v, m.node_thickness, m.triangle_nodes, self.cloth_candidates, self.cloth_candidate_count,
                           dt, self.contact_tri, self.contact_w, self.contact_n, self.contact_d, self.contact_count], dev)
-        for _ in range(max(self.settings.passes, 1)):
+        self._touched.zero_()
+        self._settled.zero_()
+        passes = max(self.settings.passes, 1) if self.has_cloth else 1
+        for k in range(passes):
             self.vertex_pass(x, v, state, dt)
             if self.has_cloth:
                 wp.launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
                           inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_gamma, m.node_kappa,
                                   m.triangle_nodes, self.contact_tri, self.contact_w, self.contact_n,
-                                  self.contact_count, dt, self.dv, self.dx, self.hits], device=dev)
-                wp.launch(apply_cloth_response, dim=m.node_count, inputs=[x, v, self.dv, self.dx, self.hits], device=dev)
+                                  self.contact_count, dt, self._settled, self._touched, self.dv, self.dx, self.hits],
+                          device=dev)
+                wp.launch(apply_cloth_response, dim=m.node_count,
+                          inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=dev)
             self.body_pass(x, v, state, dt)
-            if not self.has_cloth:
-                break
+            if k + 1 < passes:
+                self._changed.zero_()
+                wp.launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
+                if int(self._changed.numpy()[0]) == 0:
+                    break
 
     def vertex_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)
@@ -174,9 +204,9 @@ class CollisionPipeline:
         wp.launch(respond_body_vertices, dim=m.triangle_count,
                   inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
                           state.collider_qd, self.body_vertex_normals, self.body_vertices, self.body_vertex_count, dt,
-                          self.dv, self.dx, self.hits], device=m.device)
+                          self._settled, self.dv, self.dx, self.hits], device=m.device)
         wp.launch(apply_cloth_response, dim=m.node_count,
-                  inputs=[x, v, self.dv, self.dx, self.hits], device=m.device)
+                  inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=m.device)
 
     def body_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """One cloth-body response pass (eqs. 8-12) over the candidates of the last search."""
@@ -186,7 +216,7 @@ class CollisionPipeline:
         launch_items(collide_body, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution, state.collider_q,
                       state.collider_qd, m.collider_normals, m.collider_faces, self.body_faces, self.body_face_count, dt,
-                      self.contacts], m.device)
+                      self.contacts, self._settled, self._touched], m.device)
 
     def _search_body(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """Search the body's triangles (and vertices) again for the nodes (cloth triangles) that
