@@ -36,3 +36,37 @@ def test_a_bad_thread_count_is_one_line(monkeypatch):
     monkeypatch.setenv("PARTY_THREADS", "two")
     with pytest.raises(InvalidInput, match="^PARTY_THREADS must be a whole number, got 'two'$"):
         launch.thread_count()
+
+
+@wp.kernel
+def _scale_into(values: wp.array(dtype=float), factor: float, out: wp.array(dtype=float)):
+    i = wp.tid()
+    out[i] = values[i] * factor
+
+
+def test_a_replayed_launch_sees_its_arrays_contents_and_not_another_calls_values(monkeypatch):
+    monkeypatch.setattr(launch, "_recorded", launch.OrderedDict())
+    values = wp.array(np.arange(4, dtype=np.float32), dtype=float, device="cpu")
+    out = wp.zeros(4, dtype=float, device="cpu")
+    other = wp.zeros(4, dtype=float, device="cpu")
+    launch.launch(_scale_into, 4, [values, 2.0], [out], device="cpu")
+    assert np.array_equal(out.numpy(), [0, 2, 4, 6])
+    values.assign(np.full(4, 10.0, dtype=np.float32))
+    launch.launch(_scale_into, 4, [values, 2.0], [out], device="cpu")  # replayed: reads the new contents
+    assert np.array_equal(out.numpy(), [20, 20, 20, 20])
+    launch.launch(_scale_into, 4, [values, 3.0], [out], device="cpu")
+    assert np.array_equal(out.numpy(), [30, 30, 30, 30])
+    launch.launch(_scale_into, 2, [values, 1.0], [other], device="cpu")
+    assert np.array_equal(other.numpy(), [10, 10, 0, 0])
+    assert len(launch._recorded) == 3
+
+
+def test_recorded_launches_are_bounded(monkeypatch):
+    monkeypatch.setattr(launch, "_recorded", launch.OrderedDict())
+    monkeypatch.setattr(launch, "MAX_RECORDED", 2)
+    values = wp.ones(3, dtype=float, device="cpu")
+    out = wp.zeros(3, dtype=float, device="cpu")
+    for factor in (1.0, 2.0, 3.0):
+        launch.launch(_scale_into, 3, [values, factor], [out], device="cpu")
+    assert len(launch._recorded) == 2
+    assert np.array_equal(out.numpy(), [3, 3, 3])

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
+from ..launch import launch
+
 
 @wp.kernel
 def _inside_and_distance(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,
@@ -38,7 +40,7 @@ class ColliderProbe:
         nearest = np.full(n, 1.0e30)
         for mesh in self.meshes:
             distance = wp.full(n, 1.0e30, dtype=float, device=self.device)
-            wp.launch(_inside_and_distance, dim=n, inputs=[mesh.id, pts, max_dist, inside, distance], device=self.device)
+            launch(_inside_and_distance, dim=n, inputs=[mesh.id, pts, max_dist, inside, distance], device=self.device)
             nearest = np.minimum(nearest, distance.numpy())
         return inside.numpy().astype(bool), nearest
 
@@ -50,7 +52,7 @@ class ColliderProbe:
             n = len(points)
             pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=self.device)
             out = wp.zeros(n, dtype=wp.vec3, device=self.device)
-            wp.launch(_push_out, dim=n, inputs=[mesh.id, pts, float(clearance), out], device=self.device)
+            launch(_push_out, dim=n, inputs=[mesh.id, pts, float(clearance), out], device=self.device)
             points = out.numpy().astype(float)
         return points
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import warp as wp
 
+from ..launch import launch
 from .intervals import _item_boxes
 
 
@@ -31,7 +32,7 @@ class TriangleBvh:
 
     def build(self, points: wp.array, velocities: wp.array, dt: float, margin: float) -> None:
         """Recompute the boxes and refit the tree (built on the first call)."""
-        wp.launch(_item_boxes, dim=self.count,
+        launch(_item_boxes, dim=self.count,
                   inputs=[points, velocities, self.triangles, dt, margin, self.lower, self.upper, self._bounds],
                   device=self.device)
         if self.bvh is None:

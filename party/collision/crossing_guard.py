@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-from ..launch import launch_items
+from ..launch import launch, launch_items
 from ..model import Model
 from ..meshing.net import triangle_edges
 from .geometry import edge_pierces_triangle, edge_shares_node, segment_hits_triangle, segment_triangle_distance
@@ -285,7 +285,7 @@ class CrossingGuard:
                 break
             any_new = True
             self._spread(x)
-            wp.launch(_revert, dim=m.node_count,
+            launch(_revert, dim=m.node_count,
                       inputs=[self.anchor, m.node_inv_mass, self.revert, x, v, self.reverted], device=m.device)
         wp.copy(self.crossed_before, self.crossed_now)
         wp.copy(self.anchor, x)
@@ -303,7 +303,7 @@ class CrossingGuard:
             return
         for _ in range(MAX_SPREAD):
             self.added.zero_()
-            wp.launch(_spread_revert, dim=m.element_count,
+            launch(_spread_revert, dim=m.element_count,
                       inputs=[m.element_nodes, m.element_max_length, m.node_inv_mass, self.anchor, x, self.revert,
                               self.added], device=m.device)
             if int(self.added.numpy()[0]) == 0:
@@ -322,7 +322,7 @@ class CrossingGuard:
         hot = 0
         if self._listed:
             self._flag.zero_()
-            wp.launch(_mark_hot, dim=m.node_count, inputs=[x, self.listed_at, 0.5 * self.reach, self.hot, self._flag],
+            launch(_mark_hot, dim=m.node_count, inputs=[x, self.listed_at, 0.5 * self.reach, self.hot, self._flag],
                       device=m.device)
             hot = int(self._flag.numpy()[0])
             self._listed = hot <= self._most_hot
@@ -332,7 +332,7 @@ class CrossingGuard:
         if hot:
             wp.copy(self.points, x)
             self.mesh.refit()
-            wp.launch(_edge_boxes, dim=self.edge_count, inputs=[x, self.edges, self._edge_lower, self._edge_upper],
+            launch(_edge_boxes, dim=self.edge_count, inputs=[x, self.edges, self._edge_lower, self._edge_upper],
                       device=m.device)
             if self._edge_tree is None:
                 self._edge_tree = wp.Bvh(self._edge_lower, self._edge_upper)

@@ -17,6 +17,7 @@ import numpy as np
 import warp as wp
 
 from ..errors import PartyError
+from ..launch import launch
 
 
 @wp.struct
@@ -197,13 +198,13 @@ class AxisIntervalLists:
         if self.count == 0:
             return
         L, dev = self.lists, self.device
-        wp.launch(_reset_bounds, dim=6, inputs=[L.bounds], device=dev)
-        wp.launch(_item_boxes, dim=self.count,
+        launch(_reset_bounds, dim=6, inputs=[L.bounds], device=dev)
+        launch(_item_boxes, dim=self.count,
                   inputs=[points, velocities, self.triangles, dt, margin, L.item_lo, L.item_hi, L.bounds], device=dev)
-        wp.launch(_layout, dim=1, inputs=[L.bounds, self.min_cell, self.max_cells, L.cell, L.cells], device=dev)
-        wp.launch(_count, dim=self.count, inputs=[L, self._counts], device=dev)
-        wp.launch(_scan, dim=1, inputs=[self._counts, L.offsets, self._cursor, self.capacity, self._overflow], device=dev)
-        wp.launch(_fill, dim=self.count, inputs=[L, self._cursor, self.capacity], device=dev)
+        launch(_layout, dim=1, inputs=[L.bounds, self.min_cell, self.max_cells, L.cell, L.cells], device=dev)
+        launch(_count, dim=self.count, inputs=[L, self._counts], device=dev)
+        launch(_scan, dim=1, inputs=[self._counts, L.offsets, self._cursor, self.capacity, self._overflow], device=dev)
+        launch(_fill, dim=self.count, inputs=[L, self._cursor, self.capacity], device=dev)
 
     def grow_if_needed(self) -> bool:
         """After a build: if the lists overflowed, enlarge them (x1.5 headroom) and return True
@@ -268,7 +269,7 @@ def broad_phase(structure: AxisIntervalLists, lo: np.ndarray, hi: np.ndarray, ma
     out = wp.zeros((q, max_out), dtype=int, device=dev)
     count = wp.zeros(q, dtype=int, device=dev)
     rule = wp.zeros(q, dtype=int, device=dev)
-    wp.launch(_broad_phase_candidates, dim=q,
+    launch(_broad_phase_candidates, dim=q,
               inputs=[structure.lists, wp.array(lo.astype(np.float32), dtype=wp.vec3, device=dev),
                       wp.array(hi.astype(np.float32), dtype=wp.vec3, device=dev), max_out, out, count, rule],
               device=dev)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
-from ..launch import launch_items
+from ..launch import launch, launch_items
 from ..model import Model, State
 from ..model.csr import csr_order
 from ..errors import InvalidInput
@@ -165,7 +165,7 @@ class CollisionPipeline:
         if search and self.has_body:
             self._search_body(x, v, state, dt)
         if search and self.has_cloth:
-            wp.launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag], device=dev)
+            launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag], device=dev)
             if int(self._flag.numpy()[0]):
                 self._search_cloth(x, v, dt)
         if self.has_cloth:
@@ -178,17 +178,17 @@ class CollisionPipeline:
         for k in range(passes):
             self.vertex_pass(x, v, state, dt)
             if self.has_cloth:
-                wp.launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
+                launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
                           inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_gamma, m.node_kappa,
                                   m.triangle_nodes, self.contact_tri, self.contact_w, self.contact_n,
                                   self.contact_count, dt, self._settled, self._touched, self.dv, self.dx, self.hits],
                           device=dev)
-                wp.launch(apply_cloth_response, dim=m.node_count,
+                launch(apply_cloth_response, dim=m.node_count,
                           inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=dev)
             self.body_pass(x, v, state, dt)
             if k + 1 < passes:
                 self._changed.zero_()
-                wp.launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
+                launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
                 if int(self._changed.numpy()[0]) == 0:
                     break
 
@@ -201,11 +201,11 @@ class CollisionPipeline:
         if not self.has_body_vertices:
             return
         m = self.model
-        wp.launch(respond_body_vertices, dim=m.triangle_count,
+        launch(respond_body_vertices, dim=m.triangle_count,
                   inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
                           state.collider_qd, self.body_vertex_normals, self.body_vertices, self.body_vertex_count, dt,
                           self._settled, self.dv, self.dx, self.hits], device=m.device)
-        wp.launch(apply_cloth_response, dim=m.node_count,
+        launch(apply_cloth_response, dim=m.node_count,
                   inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=m.device)
 
     def body_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
@@ -244,7 +244,7 @@ class CollisionPipeline:
                       self.body_faces, self.body_face_count, self._overflow], dev)
         if self.has_body_vertices:
             if self._vertex_tree is None or self.body_moving:
-                wp.launch(vertex_boxes, dim=len(state.collider_q),
+                launch(vertex_boxes, dim=len(state.collider_q),
                           inputs=[state.collider_q, state.collider_qd, dt, half, self._vertex_lower,
                                   self._vertex_upper], device=dev)
                 if self._vertex_tree is None:

@@ -10,6 +10,7 @@ import warp as wp
 from ..body.collider import ColliderMesh
 from ..body.probe import ColliderProbe
 from ..collision.geometry import edge_pierces_triangle
+from ..launch import launch
 from ..meshing.net import triangle_edges
 
 
@@ -62,7 +63,7 @@ def body_vertices_through(points: np.ndarray, triangles: np.ndarray, colliders, 
     cloth = wp.Mesh(points=wp.array(points.astype(np.float32), dtype=wp.vec3, device=device),
                     indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
     height = wp.zeros(len(vertices), dtype=float, device=device)
-    wp.launch(_height_over_vertex, dim=len(vertices),
+    launch(_height_over_vertex, dim=len(vertices),
               inputs=[cloth.id, wp.array(vertices, dtype=wp.vec3, device=device),
                       wp.array(normals, dtype=wp.vec3, device=device), float(reach), height], device=device)
     return int(np.sum(height.numpy() < 0.0))
@@ -83,7 +84,7 @@ def crossing_edges(points: np.ndarray, triangles: np.ndarray, device: str = "cpu
     mesh = wp.Mesh(points=pts, indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
     count = wp.zeros(1, dtype=int, device=device)
     crossed = wp.zeros(len(edges), dtype=int, device=device)
-    wp.launch(_edge_crossings, dim=len(edges),
+    launch(_edge_crossings, dim=len(edges),
               inputs=[mesh.id, pts, wp.array(triangles.astype(np.int32), dtype=int, device=device),
                       wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=device), count, crossed], device=device)
     return int(count.numpy()[0]), edges[crossed.numpy().astype(bool)]

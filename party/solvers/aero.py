@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
+from ..launch import launch
+
 
 @dataclass(frozen=True)
 class Air:
@@ -127,10 +129,10 @@ class AirForces:
         if speed > 0.0 and self.air.shielding < 1.0 and self._steps % max(self.air.shield_interval, 1) == 0:
             wp.copy(self._points, x)
             self._mesh.refit()
-            wp.launch(triangle_shielding, dim=m.triangle_count,
+            launch(triangle_shielding, dim=m.triangle_count,
                       inputs=[self._mesh.id, x, m.triangle_nodes, -wind / speed, self.air.shield_range,
                               self.air.shielding, self.shield], device=m.device)
         self._steps += 1
-        wp.launch(triangle_air_forces, dim=m.triangle_count,
+        launch(triangle_air_forces, dim=m.triangle_count,
                   inputs=[x, v, m.triangle_nodes, self.shield, wind, self.air.density,
                           self.air.normal_coefficient, self.air.tangential_coefficient, f], device=m.device)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import warp as wp
 
+from ..launch import launch
 from ..model import Model, State
 from .explicit.kernels import stencil_curvature
 
@@ -126,7 +127,7 @@ class BendingHysteresis:
         """Add the slip's constant forces at ``state`` to ``f`` [N]."""
         if self.active:
             m = self.model
-            wp.launch(slip_forces, dim=m.hinge_count,
+            launch(slip_forces, dim=m.hinge_count,
                       inputs=[state.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, state.hinge_slip, f],
                       device=m.device)
 
@@ -135,6 +136,6 @@ class BendingHysteresis:
         cloth beyond the limit."""
         m = self.model
         if self.active:
-            wp.launch(update_slip, dim=m.hinge_count,
+            launch(update_slip, dim=m.hinge_count,
                       inputs=[state_out.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, m.hinge_slip_limit,
                               state_in.hinge_slip, state_out.hinge_slip], device=m.device)

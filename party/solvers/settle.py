@@ -12,6 +12,7 @@ import warp as wp
 
 from ..collision import CollisionSettings
 from ..errors import SimulationUnstable
+from ..launch import launch
 from ..model import Model, State
 from .explicit.solver import critical_time_step
 from .select import DEFAULT_DT, make_solver
@@ -96,7 +97,7 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = C
     for it in range(1, steps + 1):
         stepper.step(state, scratch, control, dt)
         state, scratch = scratch, state
-        wp.launch(_drag, dim=model.node_count, inputs=[state.node_qd, keep, float(max_speed)], device=model.device)
+        launch(_drag, dim=model.node_count, inputs=[state.node_qd, keep, float(max_speed)], device=model.device)
         if it % window == 0:
             stepper.end.flush(state)
             points = state.positions()

@@ -9,6 +9,7 @@ import warp as wp
 from ..collision import CollisionPipeline, CollisionSettings
 from ..collision.crossing_guard import CrossingGuard
 from ..errors import InvalidInput
+from ..launch import launch
 from ..model import Model, State
 from .explicit.kernels import advance_positions, cap_speed, plastic_limit
 from .hysteresis import BendingHysteresis
@@ -95,11 +96,11 @@ class StepEnd:
         if self.limit_after_contact:
             self._apply_plastic_limit(state_out, dt, over_relaxation=1.0)
             self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, search=False)
-        wp.launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
+        launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
         if self.guard is not None:
             self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd)
         if self._moving_colliders:
-            wp.launch(advance_positions, dim=len(state_out.collider_q),
+            launch(advance_positions, dim=len(state_out.collider_q),
                       inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
         self.hysteresis.update(state_in, state_out)
         state_out.time = state_in.time + dt
@@ -128,7 +129,7 @@ class StepEnd:
             sweeps += 1
             self._over_limit.zero_()
             for offset, count in launches:
-                wp.launch(plastic_limit, dim=int(count),
+                launch(plastic_limit, dim=int(count),
                           inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
                                   m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
                                   self._over_limit],
@@ -136,5 +137,5 @@ class StepEnd:
             if int(self._over_limit.numpy()[0]) == 0:
                 break
         if self.max_speed is not None:
-            wp.launch(cap_speed, dim=m.node_count, inputs=[state.node_qd, float(self.max_speed)], device=m.device)
+            launch(cap_speed, dim=m.node_count, inputs=[state.node_qd, float(self.max_speed)], device=m.device)
         return sweeps

@@ -10,7 +10,7 @@ import warp as wp
 
 from ...collision import CollisionSettings
 from ...errors import InvalidInput
-from ...launch import launch_items
+from ...launch import launch, launch_items
 from ...model import Control, Model, State
 from ...model.csr import csr_order
 from ..aero import Air, AirForces
@@ -154,7 +154,7 @@ class SolverImplicit:
         else:
             self._solve(state_in, state_out, control, dt)
         if self.kinetic_damping is not None:
-            wp.launch(kinetic_damping, dim=m.node_count,
+            launch(kinetic_damping, dim=m.node_count,
                       inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=m.device)
         self.end.finish(state_in, state_out, dt)
 
@@ -163,11 +163,11 @@ class SolverImplicit:
         so that it can be recorded once as a graph and replayed."""
         m = self.model
         dev = m.device
-        wp.launch(inertial_target, dim=m.node_count,
+        launch(inertial_target, dim=m.node_count,
                   inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
                           control.kinematic_velocity, self._correction, dt], outputs=[self._y, self._x], device=dev)
         if self._sliding:
-            wp.launch(slip_in_world, dim=m.hinge_count,
+            launch(slip_in_world, dim=m.hinge_count,
                       inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
                       device=dev)
         offsets = self.color_offsets
@@ -188,10 +188,10 @@ class SolverImplicit:
                     continue
                 rho2 = self.chebyshev ** 2
                 omega = 2.0 / (2.0 - rho2) if iteration == 1 else 4.0 / (4.0 - rho2 * omega)
-                wp.launch(chebyshev_blend, dim=m.node_count, inputs=[self._x, self._x_previous, self._x_before, omega],
+                launch(chebyshev_blend, dim=m.node_count, inputs=[self._x, self._x_previous, self._x_before, omega],
                           device=dev)
-        wp.launch(record_correction, dim=m.node_count, inputs=[self._x, self._y, self._correction], device=dev)
-        wp.launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._x, dt],
+        launch(record_correction, dim=m.node_count, inputs=[self._x, self._y, self._correction], device=dev)
+        launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._x, dt],
                   outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
 
