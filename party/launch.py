@@ -11,8 +11,12 @@ Warp runs a CPU launch's threads one after another on one core. A kernel whose t
 ``first + wp.tid()`` writes only its own item's outputs (and at most sets flags to a constant)
 gives the same result whichever order its items run in, so :func:`launch_items` cuts its range
 into one chunk per core and launches the chunks from a pool of Python threads at once: Warp
-releases the interpreter lock while a CPU kernel runs. On CUDA, and while a graph is being
-captured (a CPU graph replays its launches in order on one thread), it is one plain launch.
+releases the interpreter lock while a CPU kernel runs. Handing a chunk to another thread and
+waiting for it costs some 110 us on this kind of machine (a kernel of 130 us on one thread took
+180 on two, one of 1 ms 0.6 ms), so a kernel is split only where one thread would take longer
+than :data:`SPLIT_SECONDS`, judged from its own earlier launches' time per item. On CUDA, and
+while a graph is being captured (a CPU graph replays its launches in order on one thread), it
+is one plain launch.
 
 Warp's CPU atomics are plain read-modify-writes, so a kernel launched this way must not
 accumulate into shared memory; a counter it bumps (``wp.atomic_add``) may lose increments
@@ -23,15 +27,20 @@ of threads (default: the cores this process may use).
 from __future__ import annotations
 
 import os
-from concurrent.futures import ThreadPoolExecutor
+import time
 from collections import OrderedDict
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Sequence
 
 import warp as wp
 
 MIN_CHUNK = 1024
-"""Fewest items worth a thread of their own: below this, handing a chunk to another thread
-(some 20 us) costs more than it saves."""
+"""Fewest items worth a thread of their own."""
+
+SPLIT_SECONDS = 4.0e-4
+"""Shortest time on one thread [s] for which a launch is split over threads: the split saves
+half of it and costs some 110 us."""
+_item_seconds: dict[Any, float] = {}
 
 _CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 _pool: ThreadPoolExecutor | None = None
@@ -106,9 +115,19 @@ def launch_items(kernel: Any, first: int, count: int, inputs: Sequence[Any], dev
     device = wp.get_device(device)
     threads = min(thread_count(), count // MIN_CHUNK)
     key = (kernel.key, str(device))
-    if device.is_cuda or threads < 2 or key not in _loaded or device.is_capturing:
+    if device.is_cuda or device.is_capturing:
+        launch(kernel, count, [first, *inputs], device=device)
+        return
+    if key not in _loaded:
         launch(kernel, count, [first, *inputs], device=device)
         _loaded.add(key)  # the first launch compiles and loads the module, which threads must not race on
+        return
+    per_item = _item_seconds.get(key)
+    if threads < 2 or per_item is None or per_item * count < SPLIT_SECONDS:
+        started = time.perf_counter()
+        launch(kernel, count, [first, *inputs], device=device)
+        seconds = (time.perf_counter() - started) / count
+        _item_seconds[key] = seconds if per_item is None else 0.9 * per_item + 0.1 * seconds
         return
     global _pool, _pool_threads
     if _pool_threads < threads - 1:

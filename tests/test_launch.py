@@ -18,18 +18,41 @@ def _square_into(first: int, values: wp.array(dtype=float), out: wp.array(dtype=
 @pytest.fixture
 def small_chunks(monkeypatch):
     monkeypatch.setattr(launch, "MIN_CHUNK", 16)
+    monkeypatch.setattr(launch, "SPLIT_SECONDS", 0.0)
+    monkeypatch.setattr(launch, "_item_seconds", {})
+    monkeypatch.setattr(launch, "_loaded", set())
     monkeypatch.setenv("PARTY_THREADS", "3")
 
 
-def test_chunks_cover_every_item_once(small_chunks):
+def test_chunks_cover_every_item_once(small_chunks, monkeypatch):
+    chunks = []
+    monkeypatch.setattr(launch, "launch", lambda kernel, count, inputs, device: (
+        chunks.append((inputs[0], count)), wp.launch(kernel, dim=count, inputs=inputs, device=device)))
     values = wp.array(np.arange(1000, dtype=np.float32), dtype=float, device="cpu")
     out = wp.zeros(1000, dtype=float, device="cpu")
     visits = wp.zeros(1000, dtype=int, device="cpu")
-    for _ in range(2):  # the first launch of a kernel runs whole, the next in chunks
+    for _ in range(3):  # the first launch of a kernel runs whole, the second whole and timed, the next in chunks
         launch.launch_items(_square_into, 100, 850, [values, out, visits], "cpu")
     expected = np.where((np.arange(1000) >= 100) & (np.arange(1000) < 950), np.arange(1000.0) ** 2, 0.0)
     assert np.array_equal(out.numpy(), expected.astype(np.float32))
-    assert np.array_equal(visits.numpy(), 2 * (expected > 0))
+    assert np.array_equal(visits.numpy(), 3 * (expected > 0))
+    assert sorted(chunks[2:]) == [(100, 283), (383, 283), (666, 284)]
+
+
+def test_a_launch_shorter_than_a_handoff_stays_on_one_thread(monkeypatch):
+    monkeypatch.setattr(launch, "MIN_CHUNK", 16)
+    monkeypatch.setattr(launch, "_item_seconds", {})
+    monkeypatch.setattr(launch, "_loaded", set())
+    monkeypatch.setenv("PARTY_THREADS", "3")
+    chunks = []
+    monkeypatch.setattr(launch, "launch", lambda kernel, count, inputs, device: (
+        chunks.append(count), wp.launch(kernel, dim=count, inputs=inputs, device=device)))
+    values = wp.array(np.arange(100, dtype=np.float32), dtype=float, device="cpu")
+    out = wp.zeros(100, dtype=float, device="cpu")
+    visits = wp.zeros(100, dtype=int, device="cpu")
+    for _ in range(4):
+        launch.launch_items(_square_into, 0, 100, [values, out, visits], "cpu")
+    assert chunks == [100, 100, 100, 100]
 
 
 def test_a_bad_thread_count_is_one_line(monkeypatch):
