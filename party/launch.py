@@ -52,13 +52,14 @@ MAX_RECORDED = 512
 arrays, so this bounds the memory that models no longer in use can keep; a garment drape's
 steps make about a hundred distinct calls."""
 _recorded: OrderedDict[tuple, Any] = OrderedDict()
+_SCALARS = (bool, int, float)
 
 
 def launch(kernel: Any, dim: int | tuple[int, ...], inputs: Sequence[Any], outputs: Sequence[Any] = (),
            device: Any = None) -> None:
     """``wp.launch(kernel, dim, inputs, outputs, device)``, replayed from a recorded launch when
-    the same call was made before: the same kernel and dimensions, the same arrays (address,
-    shape and strides) and the same scalar values. Calls with other arguments (structs), and
+    the same call was made before: the same kernel and dimensions, the same array objects
+    (other array kinds: the same address, shape and strides) and the same scalar values. Calls with other arguments (structs), and
     any while a graph is being captured, are plain launches."""
     device = wp.get_device(device)
     key = None if device.is_capturing else _call_key(kernel, dim, inputs, outputs, device)
@@ -81,10 +82,13 @@ def _call_key(kernel: Any, dim: Any, inputs: Sequence[Any], outputs: Sequence[An
     covered (it is then launched plainly)."""
     parts: list[Any] = [kernel, dim, device.alias]
     for arg in (*inputs, *outputs):
-        if isinstance(arg, wp.array):
+        kind = type(arg)
+        if kind is wp.array:
+            parts.append(id(arg))  # the record holds on to the array, so no other object can take its id
+        elif kind in _SCALARS:
+            parts.append((kind, arg))
+        elif isinstance(arg, wp.array):
             parts.append((arg.ptr, arg.shape, arg.strides))
-        elif isinstance(arg, (bool, int, float)):
-            parts.append((type(arg), arg))
         elif hasattr(arg, "_length_"):  # Warp's vector and matrix values
             parts.append((type(arg), tuple(arg)))
         else:
