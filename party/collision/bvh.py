@@ -33,8 +33,8 @@ class TriangleBvh:
     def build(self, points: wp.array, velocities: wp.array, dt: float, margin: float) -> None:
         """Recompute the boxes and refit the tree (built on the first call)."""
         launch(_item_boxes, dim=self.count,
-                  inputs=[points, velocities, self.triangles, dt, margin, self.lower, self.upper, self._bounds],
-                  device=self.device)
+               inputs=[points, velocities, self.triangles, dt, margin, self.lower, self.upper, self._bounds],
+               device=self.device)
         if self.bvh is None:
             self.bvh = wp.Bvh(self.lower, self.upper)
         else:

@@ -286,7 +286,7 @@ class CrossingGuard:
             any_new = True
             self._spread(x)
             launch(_revert, dim=m.node_count,
-                      inputs=[self.anchor, m.node_inv_mass, self.revert, x, v, self.reverted], device=m.device)
+                   inputs=[self.anchor, m.node_inv_mass, self.revert, x, v, self.reverted], device=m.device)
         wp.copy(self.crossed_before, self.crossed_now)
         wp.copy(self.anchor, x)
         count = int(self.reverted.numpy().sum()) if any_new else 0
@@ -304,8 +304,8 @@ class CrossingGuard:
         for _ in range(MAX_SPREAD):
             self.added.zero_()
             launch(_spread_revert, dim=m.element_count,
-                      inputs=[m.element_nodes, m.element_max_length, m.node_inv_mass, self.anchor, x, self.revert,
-                              self.added], device=m.device)
+                   inputs=[m.element_nodes, m.element_max_length, m.node_inv_mass, self.anchor, x, self.revert,
+                           self.added], device=m.device)
             if int(self.added.numpy()[0]) == 0:
                 break
 
@@ -323,7 +323,7 @@ class CrossingGuard:
         if self._listed:
             self._flag.zero_()
             launch(_mark_hot, dim=m.node_count, inputs=[x, self.listed_at, 0.5 * self.reach, self.hot, self._flag],
-                      device=m.device)
+                   device=m.device)
             hot = int(self._flag.numpy()[0])
             self._listed = hot <= self._most_hot
         if not self._listed:
@@ -333,7 +333,7 @@ class CrossingGuard:
             wp.copy(self.points, x)
             self.mesh.refit()
             launch(_edge_boxes, dim=self.edge_count, inputs=[x, self.edges, self._edge_lower, self._edge_upper],
-                      device=m.device)
+                   device=m.device)
             if self._edge_tree is None:
                 self._edge_tree = wp.Bvh(self._edge_lower, self._edge_upper)
             else:

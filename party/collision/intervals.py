@@ -200,7 +200,7 @@ class AxisIntervalLists:
         L, dev = self.lists, self.device
         launch(_reset_bounds, dim=6, inputs=[L.bounds], device=dev)
         launch(_item_boxes, dim=self.count,
-                  inputs=[points, velocities, self.triangles, dt, margin, L.item_lo, L.item_hi, L.bounds], device=dev)
+               inputs=[points, velocities, self.triangles, dt, margin, L.item_lo, L.item_hi, L.bounds], device=dev)
         launch(_layout, dim=1, inputs=[L.bounds, self.min_cell, self.max_cells, L.cell, L.cells], device=dev)
         launch(_count, dim=self.count, inputs=[L, self._counts], device=dev)
         launch(_scan, dim=1, inputs=[self._counts, L.offsets, self._cursor, self.capacity, self._overflow], device=dev)
@@ -270,8 +270,8 @@ def broad_phase(structure: AxisIntervalLists, lo: np.ndarray, hi: np.ndarray, ma
     count = wp.zeros(q, dtype=int, device=dev)
     rule = wp.zeros(q, dtype=int, device=dev)
     launch(_broad_phase_candidates, dim=q,
-              inputs=[structure.lists, wp.array(lo.astype(np.float32), dtype=wp.vec3, device=dev),
-                      wp.array(hi.astype(np.float32), dtype=wp.vec3, device=dev), max_out, out, count, rule],
-              device=dev)
+           inputs=[structure.lists, wp.array(lo.astype(np.float32), dtype=wp.vec3, device=dev),
+                   wp.array(hi.astype(np.float32), dtype=wp.vec3, device=dev), max_out, out, count, rule],
+           device=dev)
     out, count = out.numpy(), count.numpy()
     return [out[k, : min(count[k], max_out)] for k in range(q)], rule.numpy()

@@ -179,12 +179,12 @@ class CollisionPipeline:
             self.vertex_pass(x, v, state, dt)
             if self.has_cloth:
                 launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
-                          inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_gamma, m.node_kappa,
-                                  m.triangle_nodes, self.contact_tri, self.contact_w, self.contact_n,
-                                  self.contact_count, dt, self._settled, self._touched, self.dv, self.dx, self.hits],
-                          device=dev)
+                       inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_gamma, m.node_kappa,
+                               m.triangle_nodes, self.contact_tri, self.contact_w, self.contact_n,
+                               self.contact_count, dt, self._settled, self._touched, self.dv, self.dx, self.hits],
+                       device=dev)
                 launch(apply_cloth_response, dim=m.node_count,
-                          inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=dev)
+                       inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=dev)
             self.body_pass(x, v, state, dt)
             if k + 1 < passes:
                 self._changed.zero_()
@@ -202,11 +202,11 @@ class CollisionPipeline:
             return
         m = self.model
         launch(respond_body_vertices, dim=m.triangle_count,
-                  inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
-                          state.collider_qd, self.body_vertex_normals, self.body_vertices, self.body_vertex_count, dt,
-                          self._settled, self.dv, self.dx, self.hits], device=m.device)
+               inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
+                       state.collider_qd, self.body_vertex_normals, self.body_vertices, self.body_vertex_count, dt,
+                       self._settled, self.dv, self.dx, self.hits], device=m.device)
         launch(apply_cloth_response, dim=m.node_count,
-                  inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=m.device)
+               inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=m.device)
 
     def body_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """One cloth-body response pass (eqs. 8-12) over the candidates of the last search."""
@@ -245,8 +245,8 @@ class CollisionPipeline:
         if self.has_body_vertices:
             if self._vertex_tree is None or self.body_moving:
                 launch(vertex_boxes, dim=len(state.collider_q),
-                          inputs=[state.collider_q, state.collider_qd, dt, half, self._vertex_lower,
-                                  self._vertex_upper], device=dev)
+                       inputs=[state.collider_q, state.collider_qd, dt, half, self._vertex_lower,
+                               self._vertex_upper], device=dev)
                 if self._vertex_tree is None:
                     self._vertex_tree = wp.Bvh(self._vertex_lower, self._vertex_upper)
                 else:

@@ -64,8 +64,8 @@ def body_vertices_through(points: np.ndarray, triangles: np.ndarray, colliders, 
                     indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
     height = wp.zeros(len(vertices), dtype=float, device=device)
     launch(_height_over_vertex, dim=len(vertices),
-              inputs=[cloth.id, wp.array(vertices, dtype=wp.vec3, device=device),
-                      wp.array(normals, dtype=wp.vec3, device=device), float(reach), height], device=device)
+           inputs=[cloth.id, wp.array(vertices, dtype=wp.vec3, device=device),
+                   wp.array(normals, dtype=wp.vec3, device=device), float(reach), height], device=device)
     return int(np.sum(height.numpy() < 0.0))
 
 
@@ -85,8 +85,8 @@ def crossing_edges(points: np.ndarray, triangles: np.ndarray, device: str = "cpu
     count = wp.zeros(1, dtype=int, device=device)
     crossed = wp.zeros(len(edges), dtype=int, device=device)
     launch(_edge_crossings, dim=len(edges),
-              inputs=[mesh.id, pts, wp.array(triangles.astype(np.int32), dtype=int, device=device),
-                      wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=device), count, crossed], device=device)
+           inputs=[mesh.id, pts, wp.array(triangles.astype(np.int32), dtype=int, device=device),
+                   wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=device), count, crossed], device=device)
     return int(count.numpy()[0]), edges[crossed.numpy().astype(bool)]
 
 

@@ -130,9 +130,9 @@ class AirForces:
             wp.copy(self._points, x)
             self._mesh.refit()
             launch(triangle_shielding, dim=m.triangle_count,
-                      inputs=[self._mesh.id, x, m.triangle_nodes, -wind / speed, self.air.shield_range,
-                              self.air.shielding, self.shield], device=m.device)
+                   inputs=[self._mesh.id, x, m.triangle_nodes, -wind / speed, self.air.shield_range,
+                           self.air.shielding, self.shield], device=m.device)
         self._steps += 1
         launch(triangle_air_forces, dim=m.triangle_count,
-                  inputs=[x, v, m.triangle_nodes, self.shield, wind, self.air.density,
-                          self.air.normal_coefficient, self.air.tangential_coefficient, f], device=m.device)
+               inputs=[x, v, m.triangle_nodes, self.shield, wind, self.air.density,
+                       self.air.normal_coefficient, self.air.tangential_coefficient, f], device=m.device)

@@ -128,8 +128,8 @@ class BendingHysteresis:
         if self.active:
             m = self.model
             launch(slip_forces, dim=m.hinge_count,
-                      inputs=[state.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, state.hinge_slip, f],
-                      device=m.device)
+                   inputs=[state.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, state.hinge_slip, f],
+                   device=m.device)
 
     def update(self, state_in: State, state_out: State) -> None:
         """Carry the slip from ``state_in`` to ``state_out``, slipping where the step bent the
@@ -137,5 +137,5 @@ class BendingHysteresis:
         m = self.model
         if self.active:
             launch(update_slip, dim=m.hinge_count,
-                      inputs=[state_out.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, m.hinge_slip_limit,
-                              state_in.hinge_slip, state_out.hinge_slip], device=m.device)
+                   inputs=[state_out.node_q, m.hinge_nodes, m.hinge_weights, m.hinge_friction, m.hinge_slip_limit,
+                           state_in.hinge_slip, state_out.hinge_slip], device=m.device)

@@ -101,7 +101,7 @@ class StepEnd:
             self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd)
         if self._moving_colliders:
             launch(advance_positions, dim=len(state_out.collider_q),
-                      inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
+                   inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
         self.hysteresis.update(state_in, state_out)
         state_out.time = state_in.time + dt
 
@@ -130,10 +130,10 @@ class StepEnd:
             self._over_limit.zero_()
             for offset, count in launches:
                 launch(plastic_limit, dim=int(count),
-                          inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
-                                  m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
-                                  self._over_limit],
-                          device=m.device)
+                       inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
+                               m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
+                               self._over_limit],
+                       device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break
         if self.max_speed is not None:

@@ -77,17 +77,17 @@ class SolverExplicit:
             self.air.accumulate(state_in.node_q, state_in.node_qd, control.wind, self._f_ext)
         if m.hinge_count:
             launch(hinge_forces, dim=m.hinge_count,
-                      inputs=[state_in.node_q, m.hinge_nodes, m.hinge_weights, self._bending_stiffness, self._f_ext],
-                      device=dev)
+                   inputs=[state_in.node_q, m.hinge_nodes, m.hinge_weights, self._bending_stiffness, self._f_ext],
+                   device=dev)
             self.end.hysteresis.add_forces(state_in, self._f_ext)
         launch(net_forces_and_velocity, dim=m.node_count,
-                  inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, m.node_element_offsets,
-                          m.node_element_ids, m.element_nodes, m.element_rest_length, m.element_stiffness,
-                          m.element_damping, self._f_ext, m.gravity, control.kinematic_velocity, dt],
-                  outputs=[state_out.node_q, state_out.node_qd], device=dev)
+               inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, m.node_element_offsets,
+                       m.node_element_ids, m.element_nodes, m.element_rest_length, m.element_stiffness,
+                       m.element_damping, self._f_ext, m.gravity, control.kinematic_velocity, dt],
+               outputs=[state_out.node_q, state_out.node_qd], device=dev)
         if self.kinetic_damping is not None:
             launch(kinetic_damping, dim=m.node_count,
-                      inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=dev)
+                   inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=dev)
         self.end.finish(state_in, state_out, dt)
 
 

@@ -155,7 +155,7 @@ class SolverImplicit:
             self._solve(state_in, state_out, control, dt)
         if self.kinetic_damping is not None:
             launch(kinetic_damping, dim=m.node_count,
-                      inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=m.device)
+                   inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=m.device)
         self.end.finish(state_in, state_out, dt)
 
     def _solve(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
@@ -164,12 +164,12 @@ class SolverImplicit:
         m = self.model
         dev = m.device
         launch(inertial_target, dim=m.node_count,
-                  inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
-                          control.kinematic_velocity, self._correction, dt], outputs=[self._y, self._x], device=dev)
+               inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
+                       control.kinematic_velocity, self._correction, dt], outputs=[self._y, self._x], device=dev)
         if self._sliding:
             launch(slip_in_world, dim=m.hinge_count,
-                      inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
-                      device=dev)
+                   inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
+                   device=dev)
         offsets = self.color_offsets
         omega = 1.0
         wp.copy(self._x_before, self._x)
@@ -189,10 +189,10 @@ class SolverImplicit:
                 rho2 = self.chebyshev ** 2
                 omega = 2.0 / (2.0 - rho2) if iteration == 1 else 4.0 / (4.0 - rho2 * omega)
                 launch(chebyshev_blend, dim=m.node_count, inputs=[self._x, self._x_previous, self._x_before, omega],
-                          device=dev)
+                       device=dev)
         launch(record_correction, dim=m.node_count, inputs=[self._x, self._y, self._correction], device=dev)
         launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._x, dt],
-                  outputs=[state_out.node_q, state_out.node_qd], device=dev)
+               outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
 
 def node_springs(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
