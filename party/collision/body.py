@@ -3,7 +3,8 @@ response of eqs. (8)-(12)."""
 
 import warp as wp
 
-from .geometry import boxes_overlap, closest_point_barycentric, differs, friction_restitution_response, interpolate, step_box
+from .geometry import (boxes_overlap, closest_point_barycentric, differs, friction_restitution_response, interpolate,
+                       step_box)
 from .intervals import IntervalLists, first_visit, query_axis
 
 EDGE_TOLERANCE = 0.25

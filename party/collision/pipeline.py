@@ -155,7 +155,8 @@ class CollisionPipeline:
 
         Each pass after the first leaves out what the last pass left as it was: a cloth triangle
         against the body's vertices whose nodes it did not change, a cloth contact none of whose
-        nodes it or this pass has changed so far, a node's body response where neither has. On
+        nodes it or this pass has changed (or sent a correction) so far, a node's body response
+        where neither has. On
         the same positions and velocities they would compute what they computed in the last
         pass, which changed nothing, so the result is bit for bit that of full passes; once a
         pass changes nothing, the passes stop. (After the first pass of the reference dress's
@@ -165,7 +166,8 @@ class CollisionPipeline:
         if search and self.has_body:
             self._search_body(x, v, state, dt)
         if search and self.has_cloth:
-            launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag], device=dev)
+            launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag],
+                   device=dev)
             if int(self._flag.numpy()[0]):
                 self._search_cloth(x, v, dt)
         if self.has_cloth:
