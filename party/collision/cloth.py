@@ -237,7 +237,7 @@ def respond_cloth(
     dx: wp.array(dtype=wp.vec3),
     hits: wp.array(dtype=int),
 ):
-    """Eqs. (13)-(14) for every contact still closing, accumulated Jacobi-style.
+    """Eqs. (13)-(14) for every contact of node i still closing, accumulated Jacobi-style.
 
     Node 0 is the colliding node, node 1 the point w of the struck triangle. In the rest frame
     of node 1 (the paper's setting, node 1 at rest): v0' = kappa gamma v0 and
@@ -250,61 +250,60 @@ def respond_cloth(
     nodes the last pass left ``settled`` and this one has not ``touched`` is skipped (see
     :meth:`~party.collision.pipeline.CollisionPipeline.apply`).
     """
-    i, s = wp.tid()
-    if s >= contact_count[i]:
-        return
-    t = contact_tri[i, s]
-    w = contact_w[i, s]
-    n = contact_n[i, s]
-    eps = thickness[i]
-    ta = tris[t, 0]
-    tb = tris[t, 1]
-    tc = tris[t, 2]
-    if (unchanged(i, settled, touched) and unchanged(ta, settled, touched) and unchanged(tb, settled, touched)
-            and unchanged(tc, settled, touched)):
-        return
-    d = wp.dot(x[i] - interpolate(w, x[ta], x[tb], x[tc]), n)
-    v0 = v[i]
-    v1 = interpolate(w, v[ta], v[tb], v[tc])
-    un = wp.dot(v0 - v1, n)
-    closing = d + un * dt < eps
-    if not closing and d >= eps:
-        return
-    im0 = inv_mass[i]
-    im1 = w[0] * w[0] * inv_mass[ta] + w[1] * w[1] * inv_mass[tb] + w[2] * w[2] * inv_mass[tc]
-    if im0 + im1 == 0.0:
-        return
-    w2 = wp.dot(w, w)
-    d0 = wp.vec3(0.0)
-    d1 = wp.vec3(0.0)
-    if closing and un < 0.0:
-        if im0 > 0.0 and im1 > 0.0:
-            v0n = exchange(v0, v1, gamma[i], kappa[i])
-            v1n = v1 + kappa[i] * (1.0 - gamma[i]) * (v0 - v1)
-            d0 = v0n - v0
-            d1 = v1n - v1
-        rest = wp.dot((v0 + d0) - (v1 + d1), n)
-        if rest < 0.0:
-            lam = -rest / (im0 + im1)
-            d0 = d0 + lam * im0 * n
-            d1 = d1 - lam * im1 * n
-    p0 = wp.vec3(0.0)
-    p1 = wp.vec3(0.0)
-    if d < eps:
-        depth = eps - d
-        p0 = depth * im0 / (im0 + im1) * n
-        p1 = -depth * im1 / (im0 + im1) * n
-    if im0 > 0.0:
-        wp.atomic_add(dv, i, d0)
-        wp.atomic_add(dx, i, p0)
-        wp.atomic_add(hits, i, 1)
-    for k in range(3):
-        node = tris[t, k]
-        if inv_mass[node] > 0.0 and w[k] > 0.0:
-            share = w[k] / w2
-            wp.atomic_add(dv, node, share * d1)
-            wp.atomic_add(dx, node, share * p1)
-            wp.atomic_add(hits, node, 1)
+    i = wp.tid()
+    for s in range(contact_count[i]):
+        t = contact_tri[i, s]
+        w = contact_w[i, s]
+        n = contact_n[i, s]
+        eps = thickness[i]
+        ta = tris[t, 0]
+        tb = tris[t, 1]
+        tc = tris[t, 2]
+        if (unchanged(i, settled, touched) and unchanged(ta, settled, touched) and unchanged(tb, settled, touched)
+                and unchanged(tc, settled, touched)):
+            continue
+        d = wp.dot(x[i] - interpolate(w, x[ta], x[tb], x[tc]), n)
+        v0 = v[i]
+        v1 = interpolate(w, v[ta], v[tb], v[tc])
+        un = wp.dot(v0 - v1, n)
+        closing = d + un * dt < eps
+        if not closing and d >= eps:
+            continue
+        im0 = inv_mass[i]
+        im1 = w[0] * w[0] * inv_mass[ta] + w[1] * w[1] * inv_mass[tb] + w[2] * w[2] * inv_mass[tc]
+        if im0 + im1 == 0.0:
+            continue
+        w2 = wp.dot(w, w)
+        d0 = wp.vec3(0.0)
+        d1 = wp.vec3(0.0)
+        if closing and un < 0.0:
+            if im0 > 0.0 and im1 > 0.0:
+                v0n = exchange(v0, v1, gamma[i], kappa[i])
+                v1n = v1 + kappa[i] * (1.0 - gamma[i]) * (v0 - v1)
+                d0 = v0n - v0
+                d1 = v1n - v1
+            rest = wp.dot((v0 + d0) - (v1 + d1), n)
+            if rest < 0.0:
+                lam = -rest / (im0 + im1)
+                d0 = d0 + lam * im0 * n
+                d1 = d1 - lam * im1 * n
+        p0 = wp.vec3(0.0)
+        p1 = wp.vec3(0.0)
+        if d < eps:
+            depth = eps - d
+            p0 = depth * im0 / (im0 + im1) * n
+            p1 = -depth * im1 / (im0 + im1) * n
+        if im0 > 0.0:
+            wp.atomic_add(dv, i, d0)
+            wp.atomic_add(dx, i, p0)
+            wp.atomic_add(hits, i, 1)
+        for k in range(3):
+            node = tris[t, k]
+            if inv_mass[node] > 0.0 and w[k] > 0.0:
+                share = w[k] / w2
+                wp.atomic_add(dv, node, share * d1)
+                wp.atomic_add(dx, node, share * p1)
+                wp.atomic_add(hits, node, 1)
 
 
 @wp.kernel

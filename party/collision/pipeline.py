@@ -180,7 +180,7 @@ class CollisionPipeline:
         for k in range(passes):
             self.vertex_pass(x, v, state, dt)
             if self.has_cloth:
-                launch(respond_cloth, dim=(m.node_count, MAX_CONTACTS),
+                launch(respond_cloth, dim=m.node_count,
                        inputs=[x, v, m.node_inv_mass, m.node_thickness, m.node_gamma, m.node_kappa,
                                m.triangle_nodes, self.contact_tri, self.contact_w, self.contact_n,
                                self.contact_count, dt, self._settled, self._touched, self.dv, self.dx, self.hits],
