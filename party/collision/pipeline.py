@@ -109,6 +109,7 @@ class CollisionPipeline:
                 self.body_lists = AxisIntervalLists(model.collider_faces, min_cell=size, max_cells=settings.max_cells)
             self.body_faces = wp.zeros((n, MAX_FACES), dtype=int, device=dev)
             self._body_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
+            self._body_ref_step = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.body_face_count = wp.zeros(n, dtype=int, device=dev)
             self._body_built = False
         self.has_body_vertices = self.has_body and settings.body_vertices and model.triangle_count > 0
@@ -123,6 +124,7 @@ class CollisionPipeline:
             self.body_vertex_count = wp.zeros(t, dtype=int, device=dev)
             self._vertex_distance = wp.zeros((t, MAX_VERTICES), dtype=float, device=dev)
             self._triangle_ref = wp.zeros((t, 3), dtype=wp.vec3, device=dev)
+            self._triangle_ref_step = wp.zeros((t, 3), dtype=wp.vec3, device=dev)
         if self.has_cloth:
             size = _triangle_size(model.host["points"], model.triangles)
             if self.bvh:
@@ -243,6 +245,7 @@ class CollisionPipeline:
                              else (gather_body_faces, self.body_lists.lists))
         launch_items(gather, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, structure, dt, half, everything, self._body_ref,
+                      self._body_ref_step,
                       self.body_faces, self.body_face_count, self._overflow], dev)
         if self.has_body_vertices:
             if self._vertex_tree is None or self.body_moving:
@@ -255,7 +258,8 @@ class CollisionPipeline:
                     self._vertex_tree.refit()
             launch_items(gather_body_vertices, 0, m.triangle_count,
                          [x, v, m.node_thickness, m.triangle_nodes, self._vertex_tree.id, state.collider_q,
-                          state.collider_qd, dt, half, everything, self._triangle_ref, self.body_vertices,
+                          state.collider_qd, dt, half, everything, self._triangle_ref,
+                          self._triangle_ref_step, self.body_vertices,
                           self.body_vertex_count, self._vertex_distance, self._overflow], dev)
 
     def _search_cloth(self, x: wp.array, v: wp.array, dt: float) -> None:
