@@ -16,12 +16,19 @@ MAX_FACES = 24
 
 
 @wp.func
+def near_place(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float) -> bool:
+    """Whether a node at ``x`` stepping ``v dt`` stays within ``margin`` [m] of ``ref``, the
+    place its candidates were searched from (``margin`` is half the search margin)."""
+    return wp.length(x - ref) + wp.length(v) * dt <= margin
+
+
+@wp.func
 def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, ref_step: wp.vec3, dt: float, margin: float) -> bool:
     """Whether a node at ``x`` stepping ``v dt`` stays within the box of the step it was
     searched for (from ``ref`` by ``ref_step``) grown by ``margin`` [m] (half the search margin):
-    then its step's box grown by eps lies within the box searched, and every body triangle and
-    vertex near its step is among those found. (A node that the body holds while each step's
-    solve proposes millimetres into it keeps its candidates.)"""
+    then its step's box grown by eps lies within the box searched, and every body triangle near
+    its step is among those found. (A node that the body holds while each step's solve
+    proposes millimetres into it keeps its candidates.)"""
     lo = wp.min(ref, ref + ref_step) - wp.vec3(margin)
     hi = wp.max(ref, ref + ref_step) + wp.vec3(margin)
     end = x + v * dt

@@ -17,7 +17,7 @@ eqs. (13)-(14)).
 
 import warp as wp
 
-from .body import EDGE_TOLERANCE, still_covered
+from .body import EDGE_TOLERANCE, near_place
 from .geometry import closest_point_barycentric, interpolate, triangle_step
 from .nearest import keep_nearest
 
@@ -59,7 +59,6 @@ def gather_body_vertices(
     margin: float,
     everything: int,
     ref: wp.array(dtype=wp.vec3, ndim=2),
-    ref_step: wp.array(dtype=wp.vec3, ndim=2),
     out: wp.array(dtype=int, ndim=2),
     out_count: wp.array(dtype=int),
     out_distance: wp.array(dtype=float, ndim=2),
@@ -67,28 +66,22 @@ def gather_body_vertices(
 ):
     """The body vertices whose boxes (grown by ``margin``, half the search margin) meet cloth
     triangle t's box over the step grown by eps and ``margin``, and that lie no farther from
-    the triangle than eps, the search margin and the steps. Until the next search each node's
-    step stays within the box of its step here grown by ``margin``
-    (:func:`~party.collision.body.still_covered`), so within its step and sqrt(3) ``margin`` of
-    its place here, less than the search margin: no vertex left out comes within eps. The
-    nearest MAX_VERTICES are kept, and the nodes' places and steps in ``ref``, ``ref_step``.
-    With ``everything`` 0 only triangles with a node whose step leaves its box search again
-    (the body must be static then)."""
+    the triangle than eps, the search margin and both steps: until the next search each moves
+    at most half the margin beyond its step (the reasoning of
+    :func:`~party.collision.cloth.keep_candidate`). The nearest MAX_VERTICES are kept, and the
+    nodes' places in ``ref``. With ``everything`` 0 only triangles with a node whose step leaves
+    ``margin`` of its place there search again (the body must be static then)."""
     t = first + wp.tid()
     a = tris[t, 0]
     b = tris[t, 1]
     c = tris[t, 2]
     if everything == 0:
-        if (still_covered(x[a], v[a], ref[t, 0], ref_step[t, 0], dt, margin)
-                and still_covered(x[b], v[b], ref[t, 1], ref_step[t, 1], dt, margin)
-                and still_covered(x[c], v[c], ref[t, 2], ref_step[t, 2], dt, margin)):
+        if (near_place(x[a], v[a], ref[t, 0], dt, margin) and near_place(x[b], v[b], ref[t, 1], dt, margin)
+                and near_place(x[c], v[c], ref[t, 2], dt, margin)):
             return
     ref[t, 0] = x[a]
     ref[t, 1] = x[b]
     ref[t, 2] = x[c]
-    ref_step[t, 0] = v[a] * dt
-    ref_step[t, 1] = v[b] * dt
-    ref_step[t, 2] = v[c] * dt
     eps = wp.max(thickness[a], wp.max(thickness[b], thickness[c]))
     lo = wp.min(wp.min(wp.min(x[a], x[b]), x[c]), wp.min(wp.min(x[a] + v[a] * dt, x[b] + v[b] * dt), x[c] + v[c] * dt))
     hi = wp.max(wp.max(wp.max(x[a], x[b]), x[c]), wp.max(wp.max(x[a] + v[a] * dt, x[b] + v[b] * dt), x[c] + v[c] * dt))

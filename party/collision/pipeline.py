@@ -124,7 +124,6 @@ class CollisionPipeline:
             self.body_vertex_count = wp.zeros(t, dtype=int, device=dev)
             self._vertex_distance = wp.zeros((t, MAX_VERTICES), dtype=float, device=dev)
             self._triangle_ref = wp.zeros((t, 3), dtype=wp.vec3, device=dev)
-            self._triangle_ref_step = wp.zeros((t, 3), dtype=wp.vec3, device=dev)
         if self.has_cloth:
             size = _triangle_size(model.host["points"], model.triangles)
             if self.bvh:
@@ -258,8 +257,7 @@ class CollisionPipeline:
                     self._vertex_tree.refit()
             launch_items(gather_body_vertices, 0, m.triangle_count,
                          [x, v, m.node_thickness, m.triangle_nodes, self._vertex_tree.id, state.collider_q,
-                          state.collider_qd, dt, half, everything, self._triangle_ref,
-                          self._triangle_ref_step, self.body_vertices,
+                          state.collider_qd, dt, half, everything, self._triangle_ref, self.body_vertices,
                           self.body_vertex_count, self._vertex_distance, self._overflow], dev)
 
     def _search_cloth(self, x: wp.array, v: wp.array, dt: float) -> None:
