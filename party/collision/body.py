@@ -16,25 +16,10 @@ MAX_FACES = 24
 
 
 @wp.func
-def near_place(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float) -> bool:
+def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float) -> bool:
     """Whether a node at ``x`` stepping ``v dt`` stays within ``margin`` [m] of ``ref``, the
     place its candidates were searched from (``margin`` is half the search margin)."""
     return wp.length(x - ref) + wp.length(v) * dt <= margin
-
-
-@wp.func
-def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, ref_step: wp.vec3, dt: float, margin: float) -> bool:
-    """Whether a node at ``x`` stepping ``v dt`` stays within the box of the step it was
-    searched for (from ``ref`` by ``ref_step``) grown by ``margin`` [m] (half the search margin):
-    then its step's box grown by eps lies within the box searched, and every body triangle near
-    its step is among those found. (A node that the body holds while each step's solve
-    proposes millimetres into it keeps its candidates.)"""
-    lo = wp.min(ref, ref + ref_step) - wp.vec3(margin)
-    hi = wp.max(ref, ref + ref_step) + wp.vec3(margin)
-    end = x + v * dt
-    return (x[0] >= lo[0] and x[1] >= lo[1] and x[2] >= lo[2] and x[0] <= hi[0] and x[1] <= hi[1] and x[2] <= hi[2]
-            and end[0] >= lo[0] and end[1] >= lo[1] and end[2] >= lo[2] and end[0] <= hi[0] and end[1] <= hi[1]
-            and end[2] <= hi[2])
 
 
 @wp.kernel
@@ -49,7 +34,6 @@ def gather_body_faces(
     margin: float,
     everything: int,
     ref: wp.array(dtype=wp.vec3),
-    ref_step: wp.array(dtype=wp.vec3),
     faces_out: wp.array(dtype=int, ndim=2),
     face_count: wp.array(dtype=int),
     overflow: wp.array(dtype=int),
@@ -57,14 +41,12 @@ def gather_body_faces(
     """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
     lets the answer serve the next steps, walked on the axis with n = min(n_x, n_y, n_z) list
     entries and box-checked in 3-D. The triangles found are kept for the narrow phase, and r
-    in ``ref`` with its step in ``ref_step``. With ``everything`` 0 only nodes whose step leaves
-    that step's box grown by ``margin`` search again (:func:`still_covered`; the body must be
-    static then)."""
+    in ``ref``. With ``everything`` 0 only nodes whose step leaves ``margin`` of ``ref`` search
+    again (the body must be static then)."""
     i = first + wp.tid()
-    if everything == 0 and still_covered(x[i], v[i], ref[i], ref_step[i], dt, margin):
+    if everything == 0 and still_covered(x[i], v[i], ref[i], dt, margin):
         return
     ref[i] = x[i]
-    ref_step[i] = v[i] * dt
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return
@@ -101,7 +83,6 @@ def gather_body_faces_bvh(
     margin: float,
     everything: int,
     ref: wp.array(dtype=wp.vec3),
-    ref_step: wp.array(dtype=wp.vec3),
     faces_out: wp.array(dtype=int, ndim=2),
     face_count: wp.array(dtype=int),
     overflow: wp.array(dtype=int),
@@ -109,10 +90,9 @@ def gather_body_faces_bvh(
     """:func:`gather_body_faces` with a BVH (:mod:`party.collision.bvh`) in place of the
     interval lists: the same box, the same triangles."""
     i = first + wp.tid()
-    if everything == 0 and still_covered(x[i], v[i], ref[i], ref_step[i], dt, margin):
+    if everything == 0 and still_covered(x[i], v[i], ref[i], dt, margin):
         return
     ref[i] = x[i]
-    ref_step[i] = v[i] * dt
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return

@@ -17,7 +17,7 @@ eqs. (13)-(14)).
 
 import warp as wp
 
-from .body import EDGE_TOLERANCE, near_place
+from .body import EDGE_TOLERANCE, still_covered
 from .geometry import closest_point_barycentric, interpolate, triangle_step
 from .nearest import keep_nearest
 
@@ -76,8 +76,8 @@ def gather_body_vertices(
     b = tris[t, 1]
     c = tris[t, 2]
     if everything == 0:
-        if (near_place(x[a], v[a], ref[t, 0], dt, margin) and near_place(x[b], v[b], ref[t, 1], dt, margin)
-                and near_place(x[c], v[c], ref[t, 2], dt, margin)):
+        if (still_covered(x[a], v[a], ref[t, 0], dt, margin) and still_covered(x[b], v[b], ref[t, 1], dt, margin)
+                and still_covered(x[c], v[c], ref[t, 2], dt, margin)):
             return
     ref[t, 0] = x[a]
     ref[t, 1] = x[b]

@@ -109,7 +109,6 @@ class CollisionPipeline:
                 self.body_lists = AxisIntervalLists(model.collider_faces, min_cell=size, max_cells=settings.max_cells)
             self.body_faces = wp.zeros((n, MAX_FACES), dtype=int, device=dev)
             self._body_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
-            self._body_ref_step = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.body_face_count = wp.zeros(n, dtype=int, device=dev)
             self._body_built = False
         self.has_body_vertices = self.has_body and settings.body_vertices and model.triangle_count > 0
@@ -244,7 +243,6 @@ class CollisionPipeline:
                              else (gather_body_faces, self.body_lists.lists))
         launch_items(gather, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, structure, dt, half, everything, self._body_ref,
-                      self._body_ref_step,
                       self.body_faces, self.body_face_count, self._overflow], dev)
         if self.has_body_vertices:
             if self._vertex_tree is None or self.body_moving:
