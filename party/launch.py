@@ -123,12 +123,12 @@ def launch_items(kernel: Any, first: int, count: int, inputs: Sequence[Any], dev
     if device.is_cuda or device.is_capturing:
         launch(kernel, count, [first, *inputs], device=device)
         return
-    if key not in _loaded:
+    if threads < 2 or key not in _loaded:
         launch(kernel, count, [first, *inputs], device=device)
         _loaded.add(key)  # the first launch compiles and loads the module, which threads must not race on
         return
     per_item = _item_seconds.get(key)
-    if threads < 2 or per_item is None or per_item * count < SPLIT_SECONDS:
+    if per_item is None or per_item * count < SPLIT_SECONDS:
         started = time.perf_counter()
         launch(kernel, count, [first, *inputs], device=device)
         seconds = (time.perf_counter() - started) / count

@@ -4,7 +4,7 @@ response of eqs. (8)-(12)."""
 import warp as wp
 
 from .geometry import (boxes_overlap, closest_point_barycentric, differs, friction_restitution_response, interpolate,
-                       step_box)
+                       step_box, unchanged)
 from .intervals import IntervalLists, first_visit, query_axis
 
 EDGE_TOLERANCE = 0.25
@@ -144,7 +144,7 @@ def collide_body(
     :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes.
     """
     i = first + wp.tid()
-    if inv_mass[i] == 0.0 or (settled[i] == 1 and touched[i] == 0):
+    if inv_mass[i] == 0.0 or unchanged(i, settled, touched):
         return
     x0 = x[i]
     vi = v[i]

@@ -4,7 +4,7 @@ barycentric weights."""
 
 import warp as wp
 
-from .geometry import boxes_overlap, closest_point_barycentric, interpolate, step_box, triangle_step
+from .geometry import boxes_overlap, closest_point_barycentric, interpolate, step_box, triangle_step, unchanged
 from .intervals import IntervalLists, first_visit, query_axis
 from .nearest import keep_nearest
 
@@ -211,12 +211,6 @@ def exchange(v0: wp.vec3, v1: wp.vec3, gamma: float, kappa: float) -> wp.vec3:
     return v1 + kappa * gamma * (v0 - v1)
 
 
-@wp.func
-def unchanged(i: int, settled: wp.array(dtype=int), touched: wp.array(dtype=int)) -> bool:
-    """Node i was left as it was by the last pass of Collision() and so far by this one."""
-    return settled[i] == 1 and touched[i] == 0
-
-
 @wp.kernel
 def respond_cloth(
     x: wp.array(dtype=wp.vec3),
@@ -251,15 +245,17 @@ def respond_cloth(
     :meth:`~party.collision.pipeline.CollisionPipeline.apply`).
     """
     i = wp.tid()
+    eps = thickness[i]
+    im0 = inv_mass[i]
+    node_unchanged = unchanged(i, settled, touched)
     for s in range(contact_count[i]):
         t = contact_tri[i, s]
         w = contact_w[i, s]
         n = contact_n[i, s]
-        eps = thickness[i]
         ta = tris[t, 0]
         tb = tris[t, 1]
         tc = tris[t, 2]
-        if (unchanged(i, settled, touched) and unchanged(ta, settled, touched) and unchanged(tb, settled, touched)
+        if (node_unchanged and unchanged(ta, settled, touched) and unchanged(tb, settled, touched)
                 and unchanged(tc, settled, touched)):
             continue
         d = wp.dot(x[i] - interpolate(w, x[ta], x[tb], x[tc]), n)
@@ -269,7 +265,6 @@ def respond_cloth(
         closing = d + un * dt < eps
         if not closing and d >= eps:
             continue
-        im0 = inv_mass[i]
         im1 = w[0] * w[0] * inv_mass[ta] + w[1] * w[1] * inv_mass[tb] + w[2] * w[2] * inv_mass[tc]
         if im0 + im1 == 0.0:
             continue

@@ -184,3 +184,10 @@ def segment_triangle_distance(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c:
 def differs(a: wp.vec3, b: wp.vec3) -> bool:
     """a and b differ in any component (bitwise for finite values)."""
     return a[0] != b[0] or a[1] != b[1] or a[2] != b[2]
+
+
+@wp.func
+def unchanged(i: int, settled: wp.array(dtype=int), touched: wp.array(dtype=int)) -> bool:
+    """Node i was left as it was by the last pass of Collision() (``settled``) and so far by
+    this one (not ``touched``; see :meth:`~party.collision.pipeline.CollisionPipeline.apply`)."""
+    return settled[i] == 1 and touched[i] == 0
