@@ -95,6 +95,9 @@ def plastic_limit(
     dt: float,
     tolerance: float,
     over_relaxation: float,
+    everything: int,
+    moved_before: wp.array(dtype=int),
+    moved: wp.array(dtype=int),
     over: wp.array(dtype=int),
 ):
     """f_plas (section 5, figure 5): an element may not stretch beyond (1 + L_sh) l0.
@@ -106,11 +109,17 @@ def plastic_limit(
     :class:`~party.solvers.step_end.StepEnd`). Elements of one colour share no node, so a
     colour is processed in parallel; colours run one after another. ``over`` counts the
     elements found beyond (1 + ``tolerance``) times their limit.
+
+    Unless ``everything`` is 1, an element neither of whose nodes was ``moved_before`` (in the
+    last sweep) or ``moved`` (so far in this one) is left out: it is as it was when the last
+    sweep found it within its limit. Each node a correction changes is marked in ``moved``.
     """
     e = colored[offset + wp.tid()]
     pair = elem_nodes[e]
     i = pair[0]
     k = pair[1]
+    if everything == 0 and moved_before[i] + moved_before[k] + moved[i] + moved[k] == 0:
+        return
     wi = inv_mass[i]
     wk = inv_mass[k]
     if wi + wk == 0.0:
@@ -126,6 +135,10 @@ def plastic_limit(
     excess = over_relaxation * (length - limit) / (dt * (wi + wk))
     v[i] = v[i] + direction * (excess * wi)
     v[k] = v[k] - direction * (excess * wk)
+    if wi > 0.0:
+        moved[i] = 1
+    if wk > 0.0:
+        moved[k] = 1
 
 
 @wp.kernel
