@@ -180,7 +180,8 @@ def plastic_limit_everywhere(colored: wp.array(dtype=int), offset: int, x: wp.ar
                              v: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
                              elem_nodes: wp.array(dtype=wp.vec2i), max_length: wp.array(dtype=float), dt: float,
                              tolerance: float, over_relaxation: float, everything: int,
-                             moved_before: wp.array(dtype=int), moved: wp.array(dtype=int), over: wp.array(dtype=int)):
+                             moved_before: wp.array(dtype=int), moved: wp.array(dtype=int), changed: wp.array(dtype=int),
+                             over: wp.array(dtype=int)):
     """f_plas over every element in every sweep (the reference for the sweeps that skip)."""
     e = colored[offset + wp.tid()]
     i = elem_nodes[e][0]

@@ -77,6 +77,15 @@ def close_pass(touched: wp.array(dtype=int), settled: wp.array(dtype=int), chang
     touched[i] = 0
 
 
+@wp.kernel
+def carry_settled(changed: wp.array(dtype=int), cloth_contacts: wp.array(dtype=int), settled: wp.array(dtype=int)):
+    """A node the last Collision()'s last pass left settled stays so unless ``changed`` since,
+    or it has cloth contacts now (detected anew, they may differ from those that pass saw)."""
+    i = wp.tid()
+    if changed[i] == 1 or cloth_contacts[i] > 0:
+        settled[i] = 0
+
+
 class CollisionPipeline:
     """Filters a step's velocities (and start positions) so that no node enters a body or
     crosses a cloth layer: ``v(t+dt) = Collision(v*)`` of eq. (5)."""
@@ -144,7 +153,8 @@ class CollisionPipeline:
             self.dx = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.hits = wp.zeros(n, dtype=int, device=dev)
 
-    def apply(self, x: wp.array, v: wp.array, state: State, dt: float, *, search: bool = True) -> None:
+    def apply(self, x: wp.array, v: wp.array, state: State, dt: float, *, search: bool = True,
+              changed: wp.array | None = None) -> None:
         """Collision(): modify velocities ``v`` (and start positions ``x``) in place.
 
         Repeats the search of the body's triangles and vertices for each node and cloth triangle
@@ -159,7 +169,12 @@ class CollisionPipeline:
         where neither has. On the same positions and velocities they would compute what they
         computed in the last pass, which changed nothing, so the result is bit for bit that of
         full passes; once a pass changes nothing, the passes stop. (After the first pass of the reference dress's
-        steps about 100 of its 3,312 nodes still change.)"""
+        steps about 100 of its 3,312 nodes still change.)
+
+        ``changed`` (with ``search=False``) continues the last Collision() of this step: its first
+        pass leaves out, likewise, what that one's last pass left as it was, unless marked in
+        ``changed`` (nodes whose velocity was changed since, by the plastic limit) or in cloth
+        contact (the contacts are detected anew)."""
         m = self.model
         dev = m.device
         if search and self.has_body:
@@ -173,8 +188,12 @@ class CollisionPipeline:
             launch_items(detect_cloth, 0, m.node_count,
                          [x, v, m.node_thickness, m.triangle_nodes, self.cloth_candidates, self.cloth_candidate_count,
                           dt, self.contact_tri, self.contact_w, self.contact_n, self.contact_d, self.contact_count], dev)
+        if changed is not None and not search:
+            contacts = self.contact_count if self.has_cloth else changed
+            launch(carry_settled, dim=m.node_count, inputs=[changed, contacts, self._settled], device=dev)
+        else:
+            self._settled.zero_()
         self._touched.zero_()
-        self._settled.zero_()
         passes = max(self.settings.passes, 1) if self.has_cloth else 1
         for k in range(passes):
             self.vertex_pass(x, v, state, dt)
@@ -187,11 +206,10 @@ class CollisionPipeline:
                 launch(apply_cloth_response, dim=m.node_count,
                        inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=dev)
             self.body_pass(x, v, state, dt)
-            if k + 1 < passes:
-                self._changed.zero_()
-                launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
-                if int(self._changed.numpy()[0]) == 0:
-                    break
+            self._changed.zero_()
+            launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
+            if k + 1 == passes or int(self._changed.numpy()[0]) == 0:
+                break
 
     def vertex_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)

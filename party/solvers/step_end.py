@@ -53,8 +53,9 @@ class StepEnd:
             correction along the body normal) may undo a limit correction of a node in contact;
             at the paper's dt the loss is negligible, but over a large step it lets cloth in
             contact stretch step after step (seen: 27 % beyond rest in 30 steps of 1/300 s).
-            The second Collision() searches again where the limit moved a node out of the
-            region searched: without, the reference dress once fell through the dress form in
+            The second Collision() takes up where the first left off, leaving out what it left
+            settled and the limit did not change (bit for bit the same), and searches again
+            where the limit moved a node out of the region searched: without, the reference dress once fell through the dress form in
             implicit steps (it came to rest on it with), and GarmentCode's jumpsuit, sewn
             tight, ended with 16 nodes inside the body (6 with).
         max_speed: Static relaxation's speed cap [m/s], applied to the plastic limit's
@@ -76,6 +77,7 @@ class StepEnd:
         self.plastic_passes = plastic_passes
         self._over_limit = wp.zeros(1, dtype=int, device=model.device)
         self._moved = [wp.zeros(model.node_count, dtype=int, device=model.device) for _ in range(2)]
+        self._limited = wp.zeros(model.node_count, dtype=int, device=model.device)
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = len(model.element_colored) > 0
         self._serial = wp.get_device(model.device).is_cpu
@@ -96,7 +98,8 @@ class StepEnd:
             self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
         if self.limit_after_contact:
             self._apply_plastic_limit(state_out, dt, over_relaxation=1.0)
-            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, search=False)
+            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, search=False,
+                                 changed=self._limited if self.max_speed is None else None)
         launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
         if self.guard is not None:
             self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd)
@@ -123,11 +126,13 @@ class StepEnd:
         the launch overhead (some 15 us per launch, which made the plastic limit a third of
         a garment drape's time). Sweeps after the first leave out the elements whose nodes no
         correction has changed since the last sweep began (:func:`plastic_limit`): the same
-        sweeps, bit for bit, over the few elements still at work."""
+        sweeps, bit for bit, over the few elements still at work. The nodes any correction
+        changed are marked in ``_limited``."""
         m = self.model
         offsets = m.element_color_offsets
         launches = [(0, len(m.element_colored))] if self._serial else list(zip(offsets[:-1], np.diff(offsets)))
         sweeps = 0
+        self._limited.zero_()
         while sweeps < self.plastic_passes:
             sweeps += 1
             self._over_limit.zero_()
@@ -137,7 +142,7 @@ class StepEnd:
                 launch(plastic_limit, dim=int(count),
                        inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
                                m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
-                               int(sweeps == 1), moved_before, moved, self._over_limit],
+                               int(sweeps == 1), moved_before, moved, self._limited, self._over_limit],
                        device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break

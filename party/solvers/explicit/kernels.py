@@ -98,6 +98,7 @@ def plastic_limit(
     everything: int,
     moved_before: wp.array(dtype=int),
     moved: wp.array(dtype=int),
+    changed: wp.array(dtype=int),
     over: wp.array(dtype=int),
 ):
     """f_plas (section 5, figure 5): an element may not stretch beyond (1 + L_sh) l0.
@@ -112,7 +113,8 @@ def plastic_limit(
 
     Unless ``everything`` is 1, an element neither of whose nodes was ``moved_before`` (in the
     last sweep) or ``moved`` (so far in this one) is left out: it is as it was when the last
-    sweep found it within its limit. Each node a correction changes is marked in ``moved``.
+    sweep found it within its limit. Each node a correction changes is marked in ``moved``
+    and in ``changed``.
     """
     e = colored[offset + wp.tid()]
     pair = elem_nodes[e]
@@ -137,8 +139,10 @@ def plastic_limit(
     v[k] = v[k] - direction * (excess * wk)
     if wi > 0.0:
         moved[i] = 1
+        changed[i] = 1
     if wk > 0.0:
         moved[k] = 1
+        changed[k] = 1
 
 
 @wp.kernel
