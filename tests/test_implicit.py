@@ -226,6 +226,36 @@ def test_crossing_guard_testing_listed_triangles_finds_what_a_search_at_every_ch
         assert listed.end.guard.searches == 1
 
 
+def test_crossing_guard_keeps_its_lists_while_the_cloth_moves_as_a_whole():
+    """Two layers 2 mm apart carried 10 cm sideways and down, 4 mm per check (beyond half the
+    lists' reach): no pair comes closer, so the guard lists once and reverts nothing; the
+    same move with one node left 4 mm behind in its plane makes that node (and only that one)
+    hot."""
+    from party.collision.crossing_guard import CrossingGuard
+
+    net = rectangular_net(0.1, 0.1, 0.01)
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    for z in (0.0, 0.002):
+        b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.full(net.node_count, z)])
+    model = b.finalize("cpu")
+    guard = CrossingGuard(model)
+    start = model.host["points"].astype(np.float32)
+    x = wp.array(start, dtype=wp.vec3, device="cpu")
+    v = wp.zeros(model.node_count, dtype=wp.vec3, device="cpu")
+    guard.prime(x)
+    step = np.array([0.003, 0.0, -0.00265], np.float32)
+    assert np.linalg.norm(step) > 0.5 * guard.reach
+    for k in range(1, 26):
+        x.assign(start + k * step)
+        assert guard.check(x, v) == 0
+    assert guard.searches == 1
+    moved = start + 26 * step
+    moved[7] -= (0.004, 0.0, 0.0)
+    x.assign(moved)
+    assert guard.check(x, v) == 0
+    assert np.flatnonzero(guard.hot.numpy()).tolist() == [7]
+
+
 def test_crossing_guard_stops_edges_piercing_between_nodes():
     unguarded, _ = crossing_strips(guard=False)
     assert unguarded.max() > 0  # node-triangle detection alone lets these edges through
