@@ -18,9 +18,9 @@ search lists, per edge, the triangles within a reach of it (:data:`NEAR_REACH`; 
 No other triangle can have come to an edge before one of their nodes has moved half the reach
 since, beyond the mean displacement of all nodes (a common translation moves no pair closer: cloth
 falling as a whole keeps its lists); the edges and triangles at such nodes are searched with BVHs
-at every check, and the lists are made anew once too many nodes have (:data:`HOT_SHARE`). Searching every edge at every check
-had cost the reference dress's implicit drape 3 ms a step, 15 % of its time
-(:meth:`CrossingGuard._check`).
+at every check, and the lists are made anew once too many nodes have (:data:`HOT_SHARE`).
+Searching every edge at every check had cost the reference dress's implicit drape 3 ms a step,
+15 % of its time (:meth:`CrossingGuard._check`).
 """
 
 from __future__ import annotations

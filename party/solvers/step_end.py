@@ -16,6 +16,10 @@ from .hysteresis import BendingHysteresis
 
 PLASTIC_TOLERANCE = 5.0e-5
 """Relative length beyond the plastic limit left to the next step's sweeps (0.005 %)."""
+PLASTIC_SKIPS_UNCHANGED = True
+"""Sweeps of the plastic limit after the first leave out the elements whose nodes no correction
+has changed since the last sweep began (:func:`~party.solvers.explicit.kernels.plastic_limit`);
+False sweeps every element every time, to the same result bit for bit."""
 PLASTIC_OVER_RELAXATION = 1.7
 """Over-relaxation of the plastic limit's sweeps for large steps and static relaxation (see
 :class:`StepEnd`)."""
@@ -55,9 +59,10 @@ class StepEnd:
             contact stretch step after step (seen: 27 % beyond rest in 30 steps of 1/300 s).
             The second Collision() takes up where the first left off, leaving out what it left
             settled and the limit did not change (bit for bit the same), and searches again
-            where the limit moved a node out of the region searched: without, the reference dress once fell through the dress form in
-            implicit steps (it came to rest on it with), and GarmentCode's jumpsuit, sewn
-            tight, ended with 16 nodes inside the body (6 with).
+            where the limit moved a node out of the region searched: without, the reference
+            dress once fell through the dress form in implicit steps (it came to rest on it
+            with), and GarmentCode's jumpsuit, sewn tight, ended with 16 nodes inside the body
+            (6 with).
         max_speed: Static relaxation's speed cap [m/s], applied to the plastic limit's
             velocities as well, so that no node moves farther than ``max_speed * dt`` in one
             iteration and Collision() sees every step. (Seams merged after sewing left some
@@ -142,7 +147,8 @@ class StepEnd:
                 launch(plastic_limit, dim=int(count),
                        inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
                                m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
-                               int(sweeps == 1), moved_before, moved, self._limited, self._over_limit],
+                               int(sweeps == 1 or not PLASTIC_SKIPS_UNCHANGED), moved_before, moved, self._limited,
+                               self._over_limit],
                        device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break
