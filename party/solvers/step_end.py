@@ -11,7 +11,7 @@ from ..collision.crossing_guard import CrossingGuard
 from ..errors import InvalidInput
 from ..launch import launch
 from ..model import Model, State
-from .explicit.kernels import advance_positions, cap_speed, plastic_limit
+from .explicit.kernels import advance_positions, cap_speed, next_sweep, plastic_limit
 from .hysteresis import BendingHysteresis
 
 PLASTIC_TOLERANCE = 5.0e-5
@@ -81,7 +81,8 @@ class StepEnd:
         self.collision = CollisionPipeline(model, collision) if collision is not None else None
         self.plastic_passes = plastic_passes
         self._over_limit = wp.zeros(1, dtype=int, device=model.device)
-        self._moved = [wp.zeros(model.node_count, dtype=int, device=model.device) for _ in range(2)]
+        self._moved_in = wp.zeros(model.node_count, dtype=int, device=model.device)
+        self._sweep_number = wp.zeros(1, dtype=int, device=model.device)
         self._limited = wp.zeros(model.node_count, dtype=int, device=model.device)
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = len(model.element_colored) > 0
@@ -138,17 +139,17 @@ class StepEnd:
         launches = [(0, len(m.element_colored))] if self._serial else list(zip(offsets[:-1], np.diff(offsets)))
         sweeps = 0
         self._limited.zero_()
+        self._moved_in.zero_()
+        self._sweep_number.zero_()
         while sweeps < self.plastic_passes:
             sweeps += 1
             self._over_limit.zero_()
-            moved_before, moved = self._moved[sweeps % 2], self._moved[1 - sweeps % 2]
-            moved.zero_()
+            launch(next_sweep, dim=1, inputs=[self._sweep_number, int(PLASTIC_SKIPS_UNCHANGED)], device=m.device)
             for offset, count in launches:
                 launch(plastic_limit, dim=int(count),
                        inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
                                m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
-                               int(sweeps == 1 or not PLASTIC_SKIPS_UNCHANGED), moved_before, moved, self._limited,
-                               self._over_limit],
+                               self._sweep_number, self._moved_in, self._limited, self._over_limit],
                        device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break

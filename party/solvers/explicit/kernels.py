@@ -95,9 +95,8 @@ def plastic_limit(
     dt: float,
     tolerance: float,
     over_relaxation: float,
-    everything: int,
-    moved_before: wp.array(dtype=int),
-    moved: wp.array(dtype=int),
+    sweep_number: wp.array(dtype=int),
+    moved_in: wp.array(dtype=int),
     changed: wp.array(dtype=int),
     over: wp.array(dtype=int),
 ):
@@ -111,16 +110,18 @@ def plastic_limit(
     colour is processed in parallel; colours run one after another. ``over`` counts the
     elements found beyond (1 + ``tolerance``) times their limit.
 
-    Unless ``everything`` is 1, an element neither of whose nodes was ``moved_before`` (in the
-    last sweep) or ``moved`` (so far in this one) is left out: it is as it was when the last
-    sweep found it within its limit. Each node a correction changes is marked in ``moved``
-    and in ``changed``.
+    In sweep 2 and later (``sweep_number[0]``; 0 sweeps every element), an element neither of
+    whose nodes a correction has moved in the last sweep or so far in this one (``moved_in``:
+    the last sweep that moved each node) is left out: it is as it was when the last sweep found
+    it within its limit. Each node a correction changes is marked in ``moved_in`` and in
+    ``changed``.
     """
     e = colored[offset + wp.tid()]
     pair = elem_nodes[e]
     i = pair[0]
     k = pair[1]
-    if everything == 0 and moved_before[i] + moved_before[k] + moved[i] + moved[k] == 0:
+    sweep = sweep_number[0]
+    if sweep > 1 and wp.max(moved_in[i], moved_in[k]) < sweep - 1:
         return
     wi = inv_mass[i]
     wk = inv_mass[k]
@@ -138,11 +139,17 @@ def plastic_limit(
     v[i] = v[i] + direction * (excess * wi)
     v[k] = v[k] - direction * (excess * wk)
     if wi > 0.0:
-        moved[i] = 1
+        moved_in[i] = sweep
         changed[i] = 1
     if wk > 0.0:
-        moved[k] = 1
+        moved_in[k] = sweep
         changed[k] = 1
+
+
+@wp.kernel
+def next_sweep(sweep_number: wp.array(dtype=int), count: int):
+    """Count a sweep of the plastic limit (``count`` 0 leaves it at 0: every element swept)."""
+    sweep_number[0] = sweep_number[0] + count
 
 
 @wp.kernel
