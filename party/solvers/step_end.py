@@ -143,8 +143,8 @@ class StepEnd:
         self._sweep_number.zero_()
         while sweeps < self.plastic_passes:
             sweeps += 1
-            self._over_limit.zero_()
-            launch(next_sweep, dim=1, inputs=[self._sweep_number, int(PLASTIC_SKIPS_UNCHANGED)], device=m.device)
+            launch(next_sweep, dim=1, inputs=[self._sweep_number, int(PLASTIC_SKIPS_UNCHANGED), self._over_limit],
+                   device=m.device)
             for offset, count in launches:
                 launch(plastic_limit, dim=int(count),
                        inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,

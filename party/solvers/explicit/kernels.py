@@ -147,9 +147,11 @@ def plastic_limit(
 
 
 @wp.kernel
-def next_sweep(sweep_number: wp.array(dtype=int), count: int):
-    """Count a sweep of the plastic limit (``count`` 0 leaves it at 0: every element swept)."""
+def next_sweep(sweep_number: wp.array(dtype=int), count: int, over: wp.array(dtype=int)):
+    """Start a sweep of the plastic limit: count it (``count`` 0 leaves the number at 0: every
+    element swept) and clear the count of elements found beyond."""
     sweep_number[0] = sweep_number[0] + count
+    over[0] = 0
 
 
 @wp.kernel
