@@ -78,12 +78,16 @@ def close_pass(touched: wp.array(dtype=int), settled: wp.array(dtype=int), chang
 
 
 @wp.kernel
-def carry_settled(changed: wp.array(dtype=int), cloth_contacts: wp.array(dtype=int), settled: wp.array(dtype=int)):
-    """A node the last Collision()'s last pass left settled stays so unless ``changed`` since,
-    or it has cloth contacts now (detected anew, they may differ from those that pass saw)."""
+def carry_settled(touched: wp.array(dtype=int), changed: wp.array(dtype=int), cloth_contacts: wp.array(dtype=int),
+                  settled: wp.array(dtype=int)):
+    """A node the last Collision()'s last pass left as it was (not ``touched``: once a pass has
+    changed nothing, none is) is settled for this one's first pass, unless ``changed`` since
+    (non-zero) or in cloth contact now (detected anew, the contacts may differ from those that
+    pass saw)."""
     i = wp.tid()
-    if changed[i] == 1 or cloth_contacts[i] > 0:
-        settled[i] = 0
+    settled[i] = 0
+    if touched[i] == 0 and changed[i] == 0 and cloth_contacts[i] == 0:
+        settled[i] = 1
 
 
 class CollisionPipeline:
@@ -168,11 +172,11 @@ class CollisionPipeline:
         nodes it or this pass has changed (or sent a correction) so far, a node's body response
         where neither has. On the same positions and velocities they would compute what they
         computed in the last pass, which changed nothing, so the result is bit for bit that of
-        full passes; once a pass changes nothing, the passes stop. (After the first pass of the reference dress's
-        steps about 100 of its 3,312 nodes still change.)
+        full passes; once a pass changes nothing, the passes stop. (After the first pass of the
+        reference dress's steps about 100 of its 3,312 nodes still change.)
 
         ``changed`` (with ``search=False``) continues the last Collision() of this step: its first
-        pass leaves out, likewise, what that one's last pass left as it was, unless marked in
+        pass leaves out, likewise, what that one's last pass left as it was, unless non-zero in
         ``changed`` (nodes whose velocity was changed since, by the plastic limit) or in cloth
         contact (the contacts are detected anew)."""
         m = self.model
@@ -190,7 +194,8 @@ class CollisionPipeline:
                           dt, self.contact_tri, self.contact_w, self.contact_n, self.contact_d, self.contact_count], dev)
         if changed is not None and not search:
             contacts = self.contact_count if self.has_cloth else changed
-            launch(carry_settled, dim=m.node_count, inputs=[changed, contacts, self._settled], device=dev)
+            launch(carry_settled, dim=m.node_count, inputs=[self._touched, changed, contacts, self._settled],
+                   device=dev)
         else:
             self._settled.zero_()
         self._touched.zero_()
@@ -206,10 +211,11 @@ class CollisionPipeline:
                 launch(apply_cloth_response, dim=m.node_count,
                        inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=dev)
             self.body_pass(x, v, state, dt)
-            self._changed.zero_()
-            launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
-            if k + 1 == passes or int(self._changed.numpy()[0]) == 0:
-                break
+            if k + 1 < passes:
+                self._changed.zero_()
+                launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
+                if int(self._changed.numpy()[0]) == 0:
+                    break
 
     def vertex_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)

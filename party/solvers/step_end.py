@@ -83,7 +83,6 @@ class StepEnd:
         self._over_limit = wp.zeros(1, dtype=int, device=model.device)
         self._moved_in = wp.zeros(model.node_count, dtype=int, device=model.device)
         self._sweep_number = wp.zeros(1, dtype=int, device=model.device)
-        self._limited = wp.zeros(model.node_count, dtype=int, device=model.device)
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = len(model.element_colored) > 0
         self._serial = wp.get_device(model.device).is_cpu
@@ -105,7 +104,7 @@ class StepEnd:
         if self.limit_after_contact:
             self._apply_plastic_limit(state_out, dt, over_relaxation=1.0)
             self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, search=False,
-                                 changed=self._limited if self.max_speed is None else None)
+                                 changed=self._moved_in if self.max_speed is None else None)
         launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
         if self.guard is not None:
             self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd)
@@ -133,23 +132,21 @@ class StepEnd:
         a garment drape's time). Sweeps after the first leave out the elements whose nodes no
         correction has changed since the last sweep began (:func:`plastic_limit`): the same
         sweeps, bit for bit, over the few elements still at work. The nodes any correction
-        changed are marked in ``_limited``."""
+        changed are non-zero in ``_moved_in``."""
         m = self.model
         offsets = m.element_color_offsets
         launches = [(0, len(m.element_colored))] if self._serial else list(zip(offsets[:-1], np.diff(offsets)))
         sweeps = 0
-        self._limited.zero_()
         self._moved_in.zero_()
         self._sweep_number.zero_()
         while sweeps < self.plastic_passes:
             sweeps += 1
-            launch(next_sweep, dim=1, inputs=[self._sweep_number, int(PLASTIC_SKIPS_UNCHANGED), self._over_limit],
-                   device=m.device)
+            launch(next_sweep, dim=1, inputs=[self._sweep_number, self._over_limit], device=m.device)
             for offset, count in launches:
                 launch(plastic_limit, dim=int(count),
                        inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
                                m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
-                               self._sweep_number, self._moved_in, self._limited, self._over_limit],
+                               int(PLASTIC_SKIPS_UNCHANGED), self._sweep_number, self._moved_in, self._over_limit],
                        device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break

@@ -95,9 +95,9 @@ def plastic_limit(
     dt: float,
     tolerance: float,
     over_relaxation: float,
+    skip_unchanged: int,
     sweep_number: wp.array(dtype=int),
     moved_in: wp.array(dtype=int),
-    changed: wp.array(dtype=int),
     over: wp.array(dtype=int),
 ):
     """f_plas (section 5, figure 5): an element may not stretch beyond (1 + L_sh) l0.
@@ -110,18 +110,17 @@ def plastic_limit(
     colour is processed in parallel; colours run one after another. ``over`` counts the
     elements found beyond (1 + ``tolerance``) times their limit.
 
-    In sweep 2 and later (``sweep_number[0]``; 0 sweeps every element), an element neither of
-    whose nodes a correction has moved in the last sweep or so far in this one (``moved_in``:
-    the last sweep that moved each node) is left out: it is as it was when the last sweep found
-    it within its limit. Each node a correction changes is marked in ``moved_in`` and in
-    ``changed``.
+    Each node a correction changes is marked in ``moved_in`` with the number of the sweep
+    (``sweep_number[0]``, from 1). With ``skip_unchanged`` 1, from the second sweep on, an
+    element neither of whose nodes a correction has moved in the last sweep or so far in this
+    one is left out: it is as it was when the last sweep found it within its limit.
     """
     e = colored[offset + wp.tid()]
     pair = elem_nodes[e]
     i = pair[0]
     k = pair[1]
     sweep = sweep_number[0]
-    if sweep > 1 and wp.max(moved_in[i], moved_in[k]) < sweep - 1:
+    if skip_unchanged == 1 and sweep > 1 and wp.max(moved_in[i], moved_in[k]) < sweep - 1:
         return
     wi = inv_mass[i]
     wk = inv_mass[k]
@@ -140,17 +139,15 @@ def plastic_limit(
     v[k] = v[k] - direction * (excess * wk)
     if wi > 0.0:
         moved_in[i] = sweep
-        changed[i] = 1
     if wk > 0.0:
         moved_in[k] = sweep
-        changed[k] = 1
 
 
 @wp.kernel
-def next_sweep(sweep_number: wp.array(dtype=int), count: int, over: wp.array(dtype=int)):
-    """Start a sweep of the plastic limit: count it (``count`` 0 leaves the number at 0: every
-    element swept) and clear the count of elements found beyond."""
-    sweep_number[0] = sweep_number[0] + count
+def next_sweep(sweep_number: wp.array(dtype=int), over: wp.array(dtype=int)):
+    """Start a sweep of the plastic limit: count it and clear the count of elements found
+    beyond."""
+    sweep_number[0] = sweep_number[0] + 1
     over[0] = 0
 
 
