@@ -128,3 +128,39 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
     assert overflow.numpy()[0] == 0
     assert counts["needed"] > 1000 and counts["missing"] == 0
     assert counts["searched"] < 0.5 * counts["possible"]
+
+
+def test_cloth_pressed_onto_a_rim_is_pushed_up_off_its_vertices_not_outward():
+    """A 4 cm square of cloth lying flat half an eps over a drum's rim (its middle over a rim
+    vertex, the outer half beyond the rim) is pressed down by a whole eps in a step. The rim
+    vertex's normal points half out, half up; pushed along it, cloth on a pedestal slid
+    outward step by step. Across a crease the response takes the face normal that faces the
+    cloth: the top's, so every node keeps its place and velocity across, the nodes over the
+    top end at eps and the cloth over the vertex at the gap."""
+    import warp as wp
+
+    from party.collision.pipeline import CollisionPipeline
+
+    fabric = wool_flannel()
+    eps = fabric.thickness
+    drum = trimesh.creation.cylinder(radius=0.1, height=0.2, sections=24)
+    drum.apply_translation((0.0, 0.0, -0.1))
+    net = rectangular_net(0.04, 0.04, 0.04)
+    b = ModelBuilder()
+    b.add_cloth(net, fabric, np.c_[net.uv + (0.08, -0.02), np.full(net.node_count, 0.5 * eps)])
+    b.add_collider(collider_from_trimesh(drum, "drum"))
+    model = b.finalize("cpu")
+    dt = 1.0 / 300.0
+    pipeline = CollisionPipeline(model, CollisionSettings(cloth=False, body_vertices=True))
+    state = model.state()
+    x = wp.clone(state.node_q)
+    v = wp.array(np.tile([0.0, 0.0, -eps / dt], (model.node_count, 1)), dtype=wp.vec3, device="cpu")
+    pipeline.apply(x, v, state, dt)
+    start, velocity = x.numpy(), v.numpy()
+    assert np.all(start[:, :2] == state.positions()[:, :2])
+    assert np.all(velocity[:, :2] == 0.0)
+    end = start + velocity * dt
+    over_top = np.linalg.norm(end[:, :2], axis=1) < 0.1
+    assert np.all(end[over_top, 2] >= eps * (1 - 1e-4))
+    rim_vertex = np.array([0.1, 0.0, 0.0])
+    assert min(height_over(end[t], rim_vertex) for t in model.triangles) >= GAP * eps * (1 - 1e-4)

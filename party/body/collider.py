@@ -96,6 +96,31 @@ class ColliderMesh:
         smooth = np.einsum("tkc,tc->tk", corner, fn) >= np.cos(np.radians(crease_degrees))
         return np.where(smooth[:, :, None], corner, fn[:, None, :])
 
+    def crease_normals(self, crease_degrees: float = 30.0, most: int = 4) -> np.ndarray:
+        """The faces' normals met at each vertex on a crease, shape (n, most, 3), zero-padded:
+        for a vertex where :meth:`corner_normals` keeps some corner's face normal (a rim, a
+        box's edge or corner), its faces' distinct normals (those within ``crease_degrees`` / 2
+        of one already taken count once; at most ``most``); none for a vertex on a smooth
+        surface. Between them and the vertex normal lie the directions the body faces at a
+        sharp vertex."""
+        corners = self.corner_normals(crease_degrees)
+        sharp = np.einsum("tkc,tkc->tk", corners, self.vertex_normals()[self.faces]) < 1.0 - 1e-9
+        out = np.zeros((len(self.vertices), most, 3))
+        if not sharp.any():
+            return out
+        ids, normals = self.faces[sharp], corners[sharp]
+        order = np.argsort(ids, kind="stable")
+        ids, normals = ids[order], normals[order]
+        same = np.cos(np.radians(0.5 * crease_degrees))
+        starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+        for start, stop in zip(starts, np.r_[starts[1:], len(ids)]):
+            taken = []
+            for n in normals[start:stop]:
+                if len(taken) < most and all(float(n @ t) < same for t in taken):
+                    taken.append(n)
+            out[ids[start], :len(taken)] = taken
+        return out
+
     def translated(self, offset) -> "ColliderMesh":
         return ColliderMesh(self.name, self.vertices + np.asarray(offset, float), self.faces, self.velocity)
 

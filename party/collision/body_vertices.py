@@ -98,6 +98,23 @@ def gather_body_vertices(
     out_count[t] = count
 
 
+@wp.func
+def facing_normal(d: wp.vec3, normal: wp.vec3, crease_normals: wp.array(dtype=wp.vec3, ndim=2), p: int) -> wp.vec3:
+    """The body's normal at vertex p for a cloth point at ``d`` from it [m]: the vertex
+    ``normal``, or on a crease whichever of it and the faces' normals there
+    (``crease_normals[p]``, zero-padded) faces the point most. The vertex normal of a rim
+    points half out, half up; a cloth point over the flat top, pushed along it, slid outward
+    step by step and the large-step solver's Cusick specimens were pulled off the pedestal."""
+    best = normal
+    along = wp.dot(d, normal)
+    for k in range(crease_normals.shape[1]):
+        c = crease_normals[p, k]
+        if wp.length_sq(c) > 0.0 and wp.dot(d, c) > along:
+            best = c
+            along = wp.dot(d, c)
+    return best
+
+
 @wp.kernel
 def respond_body_vertices(
     x: wp.array(dtype=wp.vec3),
@@ -108,6 +125,7 @@ def respond_body_vertices(
     body_q: wp.array(dtype=wp.vec3),
     body_qd: wp.array(dtype=wp.vec3),
     vertex_normals: wp.array(dtype=wp.vec3),
+    crease_normals: wp.array(dtype=wp.vec3, ndim=2),
     candidates: wp.array(dtype=int, ndim=2),
     candidate_count: wp.array(dtype=int),
     dt: float,
@@ -117,7 +135,8 @@ def respond_body_vertices(
     hits: wp.array(dtype=int),
 ):
     """For cloth triangle t, the candidate vertex whose step ends nearest (the cloth point over
-    it at height s + (v_q - v_p) . n_p dt below the gap, :data:`GAP` eps), among those under the
+    it at height s + (v_q - v_p) . n_p dt below the gap, :data:`GAP` eps; n_p the vertex
+    normal, on a crease the face normal there that faces the point, :func:`facing_normal`), among those under the
     triangle (off it sideways by no more than the body response's tolerance,
     :data:`~party.collision.body.EDGE_TOLERANCE` eps) and no deeper than eps behind the vertex:
     stop the point's approach and move its start out so that the step ends at the gap,
@@ -147,7 +166,7 @@ def respond_body_vertices(
         offset = body_q[p] - q
         if wp.length(offset - wp.dot(offset, face) * face) > EDGE_TOLERANCE * eps:
             continue
-        n = vertex_normals[p]
+        n = facing_normal(q - body_q[p], vertex_normals[p], crease_normals, p)
         s = wp.dot(q - body_q[p], n)
         if s < -eps:
             continue

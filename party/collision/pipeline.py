@@ -128,6 +128,8 @@ class CollisionPipeline:
         if self.has_body_vertices:
             normals = np.concatenate([c.vertex_normals() for c in model.host["colliders"]])
             self.body_vertex_normals = wp.array(normals.astype(np.float32), dtype=wp.vec3, device=dev)
+            creases = np.concatenate([c.crease_normals() for c in model.host["colliders"]])
+            self.body_crease_normals = wp.array(creases.astype(np.float32), dtype=wp.vec3, ndim=2, device=dev)
             self._vertex_lower = wp.zeros(len(normals), dtype=wp.vec3, device=dev)
             self._vertex_upper = wp.zeros(len(normals), dtype=wp.vec3, device=dev)
             self._vertex_tree: wp.Bvh | None = None
@@ -228,7 +230,7 @@ class CollisionPipeline:
         m = self.model
         launch(respond_body_vertices, dim=m.triangle_count,
                inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
-                       state.collider_qd, self.body_vertex_normals, self.body_vertices, self.body_vertex_count, dt,
+                       state.collider_qd, self.body_vertex_normals, self.body_crease_normals, self.body_vertices, self.body_vertex_count, dt,
                        self._settled, self.dv, self.dx, self.hits], device=m.device)
         launch(apply_cloth_response, dim=m.node_count,
                inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=m.device)
