@@ -37,3 +37,33 @@ def test_mean_all_is_read_y_up_in_metres():
     assert np.ptp(v[:, 2]) == pytest.approx(1.72, abs=0.01)
     assert np.allclose(body.to_file_frame(v)[:, 1], (body.colliders[0].vertices @ body.to_source.T)[:, 1])
     assert abs(body.landmarks["waist"] - 1.07) < 0.05
+
+
+def test_crease_normals_are_the_faces_normals_at_convex_sharp_vertices_only():
+    """A drum's rim vertex faces up and out: its crease normals are the top's and its side's
+    (the side's two faces there, 11.25 degrees apart, count once). A sphere has no creases, and
+    the inner corner of an L-shaped block, sharp but concave, gets none either."""
+    import trimesh
+
+    from party.body.collider import collider_from_trimesh
+
+    def creases(mesh):
+        return collider_from_trimesh(mesh, "prop").crease_normals()
+
+    drum = trimesh.creation.cylinder(radius=0.1, height=0.2, sections=32)
+    rim = int(np.flatnonzero((np.abs(drum.vertices[:, 2] - 0.1) < 1e-9) & (drum.vertices[:, 0] > 0.099))[0])
+    normals = creases(drum)[rim]
+    taken = normals[np.linalg.norm(normals, axis=1) > 0]
+    assert len(taken) == 2
+    up = np.argmax(taken[:, 2])
+    assert np.allclose(taken[up], [0, 0, 1]) and taken[1 - up] @ [1, 0, 0] > np.cos(np.radians(5.7))
+    assert not creases(trimesh.creation.icosphere(3)).any()
+    outline = np.array([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], float)
+    cap = np.array([(0, 1, 2), (0, 2, 3), (0, 3, 4), (0, 4, 5)])
+    sides = [(i, (i + 1) % 6, (i + 1) % 6 + 6) for i in range(6)] + [(i, (i + 1) % 6 + 6, i + 6) for i in range(6)]
+    block = trimesh.Trimesh(np.r_[np.c_[outline, np.zeros(6)], np.c_[outline, np.ones(6)]],
+                            np.r_[cap[:, ::-1], cap + 6, sides], process=False)
+    inner = np.flatnonzero(np.all(np.abs(block.vertices[:, :2] - (1, 1)) < 1e-9, axis=1))
+    outer = np.flatnonzero(np.all(np.abs(block.vertices[:, :2] - (2, 0)) < 1e-9, axis=1))
+    assert len(inner) == 2 and not creases(block)[inner].any()
+    assert np.all(np.linalg.norm(creases(block)[outer], axis=2).max(axis=1) > 0)

@@ -97,12 +97,12 @@ class ColliderMesh:
         return np.where(smooth[:, :, None], corner, fn[:, None, :])
 
     def crease_normals(self, crease_degrees: float = 30.0, most: int = 4) -> np.ndarray:
-        """The faces' normals met at each vertex on a crease, shape (n, most, 3), zero-padded:
-        for a vertex where :meth:`corner_normals` keeps some corner's face normal (a rim, a
-        box's edge or corner), its faces' distinct normals (those within ``crease_degrees`` / 2
-        of one already taken count once; at most ``most``); none for a vertex on a smooth
-        surface. Between them and the vertex normal lie the directions the body faces at a
-        sharp vertex."""
+        """The faces' normals met at each convex vertex on a crease, shape (n, most, 3),
+        zero-padded: for a vertex where :meth:`corner_normals` keeps some corner's face normal
+        (a rim, a box's edge or corner) and whose neighbours all lie on or behind each of its
+        faces, those faces' distinct normals (those within ``crease_degrees`` / 2 of one already
+        taken count once; at most ``most``). Between them and the vertex normal lie the
+        directions the body faces at a sharp convex vertex; a smooth or concave vertex has none."""
         corners = self.corner_normals(crease_degrees)
         sharp = np.einsum("tkc,tkc->tk", corners, self.vertex_normals()[self.faces]) < 1.0 - 1e-9
         out = np.zeros((len(self.vertices), most, 3))
@@ -111,14 +111,23 @@ class ColliderMesh:
         ids, normals = self.faces[sharp], corners[sharp]
         order = np.argsort(ids, kind="stable")
         ids, normals = ids[order], normals[order]
+        f = self.faces
+        edges = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+        edges = np.unique(np.concatenate([edges, edges[:, ::-1]]), axis=0)
+        first = np.searchsorted(edges[:, 0], np.arange(len(self.vertices) + 1))
         same = np.cos(np.radians(0.5 * crease_degrees))
         starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
         for start, stop in zip(starts, np.r_[starts[1:], len(ids)]):
+            vertex = ids[start]
+            ring = self.vertices[edges[first[vertex]:first[vertex + 1], 1]] - self.vertices[vertex]
+            reach = np.linalg.norm(ring, axis=1).max()
+            if np.any(ring @ normals[start:stop].T > 1e-6 * reach):
+                continue
             taken = []
             for n in normals[start:stop]:
                 if len(taken) < most and all(float(n @ t) < same for t in taken):
                     taken.append(n)
-            out[ids[start], :len(taken)] = taken
+            out[vertex, :len(taken)] = taken
         return out
 
     def translated(self, offset) -> "ColliderMesh":
