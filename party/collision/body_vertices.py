@@ -9,7 +9,9 @@ vertices outside its sleeves and bodice, seen as patches of skin in the pictures
 patch of body the point nearest a triangle is one of its vertices, so each cloth triangle is
 also tested against the body vertices near it, as a node against a body triangle: the closest
 point q of the triangle to a vertex p gives the cloth point's height s = (q - p) . n_p over
-the body along the vertex normal; where the step would end it closer than a quarter of eps
+the body along the vertex normal n_p (at a convex vertex on a crease, a rim or a box's edge,
+along whichever of it and the faces' normals there faces the point most:
+:func:`facing_normal`); where the step would end it closer than a quarter of eps
 (:data:`GAP`), its approach is stopped and its start moved out along n_p, the change spread
 over the triangle's nodes by their weights (as the struck point of a cloth contact is,
 eqs. (13)-(14)).
