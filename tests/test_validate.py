@@ -197,3 +197,17 @@ def test_both_solvers_drape_a_measured_cusick_specimen_alike():
     explicit, implicit = (cusick.drape_test(fabric, solver, cusick.MEASURED_SPACING, drapemeter=cusick.MATSUDAIRA)
                           for solver in SOLVERS)
     assert abs(implicit.coefficient - explicit.coefficient) < 0.03
+
+
+@pytest.mark.skipif(not cusick.MEASURED.exists(), reason=f"measured fabric data not found at {cusick.MEASURED}")
+def test_measured_wool_and_polyester_tropicals_drape_within_case_7s_tolerance():
+    """Case 7 on its first specimen, explicit solver: fabrics B and C (measured DC 49.8 and
+    50.7 %, 5 folds each) within 8 DC points and 1 fold of the measurement. Not asserted, as
+    they miss: fabric F's folds (8 or 9 against 7, with either solver) and the implicit solver's
+    B (41.0 %, 7 folds), see docs/design.md."""
+    measured = {f.name: (f, dc, nodes) for f, dc, nodes in cusick.measured_fabrics()}
+    for name in ("measured_B", "measured_C"):
+        fabric, dc, nodes = measured[name]
+        drape = cusick.drape_test(fabric, "explicit", cusick.MEASURED_SPACING, drapemeter=cusick.MATSUDAIRA)
+        assert abs(100.0 * drape.coefficient - dc) <= cusick.DC_TOLERANCE, name
+        assert abs(drape.nodes - nodes) <= cusick.NODE_TOLERANCE, name
