@@ -90,38 +90,29 @@ class ColliderMesh:
         """Normals at each face corner, shape (t, 3, 3): the smooth vertex normal where it is
         within ``crease_degrees`` of the face normal, else the face normal (sharp edges of a
         box or a table stay sharp, a sphere or a body stays smooth)."""
-        fn = self.face_normals_unnormalized()
-        fn /= np.linalg.norm(fn, axis=1, keepdims=True)
-        corner = self.vertex_normals()[self.faces]
-        smooth = np.einsum("tkc,tc->tk", corner, fn) >= np.cos(np.radians(crease_degrees))
-        return np.where(smooth[:, :, None], corner, fn[:, None, :])
+        return self._corners(crease_degrees)[0]
 
     def crease_normals(self, crease_degrees: float = 30.0, most: int = 4) -> np.ndarray:
         """The faces' normals met at each convex vertex on a crease, shape (n, most, 3),
         zero-padded: for a vertex where :meth:`corner_normals` keeps some corner's face normal
-        (a rim, a box's edge or corner) and whose neighbours all lie on or behind each of its
-        faces, those faces' distinct normals (those within ``crease_degrees`` / 2 of one already
-        taken count once; at most ``most``). Between them and the vertex normal lie the
-        directions the body faces at a sharp convex vertex; a smooth or concave vertex has none."""
-        corners = self.corner_normals(crease_degrees)
-        sharp = np.einsum("tkc,tkc->tk", corners, self.vertex_normals()[self.faces]) < 1.0 - 1e-9
+        (a rim, a box's edge or corner) and whose neighbours all lie on or behind each of those
+        faces, their distinct normals (those within ``crease_degrees`` / 2 of one already taken
+        count once; at most ``most``). Between them and the vertex normal lie the directions
+        the body faces at a sharp convex vertex; a smooth or concave vertex has none."""
+        normals, sharp = self._corners(crease_degrees)
         out = np.zeros((len(self.vertices), most, 3))
         if not sharp.any():
             return out
-        ids, normals = self.faces[sharp], corners[sharp]
+        ids, normals = self.faces[sharp], normals[sharp]
         order = np.argsort(ids, kind="stable")
         ids, normals = ids[order], normals[order]
-        f = self.faces
-        edges = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-        edges = np.unique(np.concatenate([edges, edges[:, ::-1]]), axis=0)
-        first = np.searchsorted(edges[:, 0], np.arange(len(self.vertices) + 1))
+        neighbours = self.to_trimesh().vertex_neighbors
         same = np.cos(np.radians(0.5 * crease_degrees))
         starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
         for start, stop in zip(starts, np.r_[starts[1:], len(ids)]):
             vertex = ids[start]
-            ring = self.vertices[edges[first[vertex]:first[vertex + 1], 1]] - self.vertices[vertex]
-            reach = np.linalg.norm(ring, axis=1).max()
-            if np.any(ring @ normals[start:stop].T > 1e-6 * reach):
+            ring = self.vertices[neighbours[vertex]] - self.vertices[vertex]
+            if np.any(ring @ normals[start:stop].T > 1e-6 * np.linalg.norm(ring, axis=1).max()):
                 continue
             taken = []
             for n in normals[start:stop]:
@@ -129,6 +120,14 @@ class ColliderMesh:
                     taken.append(n)
             out[vertex, :len(taken)] = taken
         return out
+
+    def _corners(self, crease_degrees: float) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`corner_normals` and which corners took the face normal (sharp), shape (t, 3)."""
+        fn = self.face_normals_unnormalized()
+        fn /= np.linalg.norm(fn, axis=1, keepdims=True)
+        corner = self.vertex_normals()[self.faces]
+        sharp = np.einsum("tkc,tc->tk", corner, fn) < np.cos(np.radians(crease_degrees))
+        return np.where(sharp[:, :, None], fn[:, None, :], corner), sharp
 
     def translated(self, offset) -> "ColliderMesh":
         return ColliderMesh(self.name, self.vertices + np.asarray(offset, float), self.faces, self.velocity)
