@@ -1,11 +1,14 @@
 """How the implicit step's cost grows with the node count.
 
-    python benchmarks/scaling.py [--sizes 1000 2000 ... 100000] [--steps 30] [--self-collision]
-                                 [--spacing M]
+    python benchmarks/scaling.py [--sizes 1000 2000 ... 100000] [--steps 30] [--repeats 3]
+                                 [--self-collision] [--spacing M]
 
 A square of cotton resting on a sphere (as in ``party run sphere-drop``, started just above
-the sphere so contacts are live) at each size; prints milliseconds per step after a warm-up,
-and the cost per doubling relative to linear growth (1.0 = linear) between neighbouring sizes.
+the sphere so contacts are live) at each size; prints milliseconds per step after a warm-up
+(the least of ``--repeats`` runs of ``--steps`` steps, each from a fresh model: single runs on a
+shared 2-core machine differed by up to 30 % at one size), the cost per doubling relative to
+linear growth (1.0 = linear) between neighbouring sizes, and over the whole range the
+exponent p of a least-squares fit ms ~ nodes^p, as its cost per doubling 2^(p - 1).
 The square is 1 m across, so more nodes mean a finer net, or with ``--spacing`` its nodes are
 that far apart and the square grows. In the 1 m square with self-collision, a net finer than
 about 4 mm (64k nodes and more) finds more cloth triangles within the collision thickness
@@ -55,11 +58,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 2000, 4000, 8000, 16000, 32000, 64000, 100000])
     parser.add_argument("--steps", type=int, default=30)
+    parser.add_argument("--repeats", type=int, default=3, help="runs per size; the fastest counts")
     parser.add_argument("--self-collision", action="store_true")
     parser.add_argument("--spacing", type=float, default=None,
                         help="node spacing [m], the square growing with the node count (default: a 1 m square)")
     args = parser.parse_args()
-    rows = [step_ms(n, args.steps, args.self_collision, args.spacing) for n in args.sizes]
+    rows = []
+    for n in args.sizes:
+        runs = [step_ms(n, args.steps, args.self_collision, args.spacing) for _ in range(max(args.repeats, 1))]
+        rows.append((runs[0][0], min(ms for _, ms in runs)))
     print(f"{'nodes':>8} {'ms/step':>9} {'per doubling vs linear':>24}")
     for k, (n, ms) in enumerate(rows):
         growth = ""
@@ -67,6 +74,11 @@ def main() -> None:
             n0, ms0 = rows[k - 1]
             growth = f"{(ms / ms0) ** (np.log(2) / np.log(n / n0)) / 2.0:.2f}"
         print(f"{n:>8} {ms:>9.2f} {growth:>24}")
+    if len(rows) > 1:
+        nodes, ms = np.log(np.array(rows, dtype=float)).T
+        exponent = np.polyfit(nodes, ms, 1)[0]
+        print(f"fit over {rows[0][0]}-{rows[-1][0]} nodes: ms ~ nodes^{exponent:.3f}, "
+              f"{2.0 ** (exponent - 1.0):.2f} per doubling vs linear")
 
 
 if __name__ == "__main__":
