@@ -6,7 +6,7 @@
 A square of cotton resting on a sphere (as in ``party run sphere-drop``, started just above
 the sphere so contacts are live) at each size; prints milliseconds per step after a warm-up
 (the least of ``--repeats`` runs of ``--steps`` steps, each from a fresh model: single runs on a
-shared 2-core machine differed by up to 30 % at one size), the cost per doubling relative to
+shared 2-core machine differed by up to a third at one size), the cost per doubling relative to
 linear growth (1.0 = linear) between neighbouring sizes, and over the whole range the
 exponent p of a least-squares fit ms ~ nodes^p, as its cost per doubling 2^(p - 1).
 The square is 1 m across, so more nodes mean a finer net, or with ``--spacing`` its nodes are
@@ -63,9 +63,11 @@ def main() -> None:
     parser.add_argument("--spacing", type=float, default=None,
                         help="node spacing [m], the square growing with the node count (default: a 1 m square)")
     args = parser.parse_args()
+    if args.repeats < 1 or args.steps < 1:
+        parser.error(f"--repeats and --steps must be at least 1, got {args.repeats} and {args.steps}")
     rows = []
     for n in args.sizes:
-        runs = [step_ms(n, args.steps, args.self_collision, args.spacing) for _ in range(max(args.repeats, 1))]
+        runs = [step_ms(n, args.steps, args.self_collision, args.spacing) for _ in range(args.repeats)]
         rows.append((runs[0][0], min(ms for _, ms in runs)))
     print(f"{'nodes':>8} {'ms/step':>9} {'per doubling vs linear':>24}")
     for k, (n, ms) in enumerate(rows):
