@@ -126,7 +126,6 @@ def collide_body(
     candidates: wp.array(dtype=int, ndim=2),
     candidate_count: wp.array(dtype=int),
     dt: float,
-    contacts: wp.array(dtype=int),
     settled: wp.array(dtype=int),
     touched: wp.array(dtype=int),
 ):
@@ -200,4 +199,3 @@ def collide_body(
     if differs(vnew, vi):
         touched[i] = 1
     v[i] = vnew
-    contacts[i] = 1

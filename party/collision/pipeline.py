@@ -104,7 +104,6 @@ class CollisionPipeline:
         self.body_moving = bool(np.any(model.collider_velocity != 0.0))
         self.margin = float(settings.search_margin)
         self.bvh = settings.broad_phase == "bvh"
-        self.contacts = wp.zeros(n, dtype=int, device=dev)
         self._touched = wp.zeros(n, dtype=int, device=dev)
         self._settled = wp.zeros(n, dtype=int, device=dev)
         self._changed = wp.zeros(1, dtype=int, device=dev)
@@ -243,7 +242,7 @@ class CollisionPipeline:
         launch_items(collide_body, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution, state.collider_q,
                       state.collider_qd, m.collider_normals, m.collider_faces, self.body_faces, self.body_face_count, dt,
-                      self.contacts, self._settled, self._touched], m.device)
+                      self._settled, self._touched], m.device)
 
     def _search_body(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """Search the body's triangles (and vertices) again for the nodes (cloth triangles) that
