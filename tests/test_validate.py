@@ -187,7 +187,8 @@ def test_report_table_says_whether_a_decision_was_right():
     assert "wrong" in rows[1] and "FAIL" in rows[1]
 
 
-MEASURED = pytest.mark.skipif(not cusick.MEASURED.exists(), reason=f"measured fabric data not found at {cusick.MEASURED}")
+MEASURED = pytest.mark.skipif(not cusick.MEASURED.exists(),
+                              reason=f"measured fabric data not found at {cusick.MEASURED}")
 
 
 def measured_drape(name: str, solver: str):
