@@ -6,6 +6,7 @@ import sys
 
 import numpy as np
 import pytest
+import warp as wp
 
 from party.errors import InvalidInput, SimulationUnstable
 from party.fabric import wool_flannel
@@ -39,6 +40,14 @@ def test_unknown_scene():
     result = party("run", "no-such-scene", "--out", "x")
     assert result.returncode == 1
     assert result.stderr.strip() == "error: unknown scene 'no-such-scene'; known: dress, rod-wind, sphere-drop"
+
+
+@pytest.mark.skipif(wp.is_cuda_available(), reason="this machine has a CUDA device")
+def test_cuda_asked_for_where_there_is_none(tmp_path):
+    result = party("run", "sphere-drop", "--grid", "8", "--device", "cuda", "--out", str(tmp_path / "o"))
+    assert result.returncode == 1
+    assert result.stderr.strip() == "error: device 'cuda' requested but no CUDA device is available"
+    assert not (tmp_path / "o").exists()
 
 
 def test_scenes_are_listed():
