@@ -1,10 +1,10 @@
 """Blender's cloth on the sphere-drop scene, run by ``benchmarks/compare.py`` in its own venv
 (bpy 5.0.1, Python 3.11):
 
-    python blender_sphere.py -- N SELF OUT.npz
+    python blender_sphere.py -- N SELF OUT.npz [SECONDS]
 
 A 1 m cloth of N x N vertices 0.32 m above a static sphere (r = 0.3 m) at the origin, Z up,
-1 s at 30 frames per second, quality 5 (Blender's defaults otherwise, a cotton-like cloth),
+SECONDS (default 1) at 30 frames per second, quality 5 (Blender's defaults otherwise, a cotton-like cloth),
 collision distance 4 mm. Writes the final vertex positions [m], the set-up seconds and the
 simulation wall seconds to OUT.npz.
 """
@@ -18,9 +18,11 @@ import bpy  # noqa: E402
 
 args = sys.argv[sys.argv.index("--") + 1:]
 n, self_collision, out = int(args[0]), args[1] == "1", args[2]
+seconds = float(args[3]) if len(args) > 3 else 1.0
+last = 1 + round(30 * seconds)
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
-scene.frame_start, scene.frame_end, scene.render.fps = 1, 31, 30
+scene.frame_start, scene.frame_end, scene.render.fps = 1, last, 30
 bpy.ops.mesh.primitive_grid_add(x_subdivisions=n - 1, y_subdivisions=n - 1, size=1.0, location=(0, 0, 0.62))
 cloth = bpy.context.active_object
 bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=0.3, location=(0, 0, 0))
@@ -32,12 +34,12 @@ modifier.settings.quality = 5
 modifier.collision_settings.use_self_collision = self_collision
 modifier.collision_settings.distance_min = 0.004
 modifier.collision_settings.self_distance_min = 0.004
-modifier.point_cache.frame_end = 31
+modifier.point_cache.frame_end = last
 setup = time.perf_counter() - t0
 t = time.perf_counter()
-for frame in range(1, 32):
+for frame in range(1, last + 1):
     scene.frame_set(frame)
 wall = time.perf_counter() - t
 evaluated = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
 points = np.array([(evaluated.matrix_world @ v.co)[:] for v in evaluated.data.vertices])
-np.savez(out, points=points, setup_seconds=setup, wall_seconds=wall, simulated_seconds=1.0)
+np.savez(out, points=points, setup_seconds=setup, wall_seconds=wall, simulated_seconds=(last - 1) / 30)

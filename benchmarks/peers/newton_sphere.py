@@ -1,10 +1,10 @@
 """NVIDIA Newton's VBD cloth solver on the sphere-drop scene, on the CPU, run by
 ``benchmarks/compare.py`` in its own venv (newton 1.8.0):
 
-    python newton_sphere.py N SELF OUT.npz
+    python newton_sphere.py N SELF OUT.npz [SECONDS]
 
 A 1 m cloth of N x N particles 0.32 m above a static sphere (r = 0.3 m) at the origin, Z up,
-1 s at 60 frames per second, 10 substeps of 10 VBD iterations (Newton's cloth examples),
+SECONDS (default 1) at 60 frames per second, 10 substeps of 10 VBD iterations (Newton's cloth examples),
 areal density 0.23 kg/m^2. The first frame (kernel compilation) is timed apart. Writes the
 final positions [m], start-up and wall seconds to OUT.npz.
 """
@@ -19,6 +19,7 @@ import warp as wp  # noqa: E402
 
 wp.config.quiet = True
 n, self_contact, out = int(sys.argv[1]), sys.argv[2] == "1", sys.argv[3]
+seconds = float(sys.argv[4]) if len(sys.argv) > 4 else 1.0
 fps, substeps, iterations = 60, 10, 10
 builder = newton.ModelBuilder(up_axis=newton.Axis.Z)
 cell = 1.0 / (n - 1)
@@ -50,8 +51,9 @@ frame()
 wp.synchronize()
 setup = time.perf_counter() - t0
 t = time.perf_counter()
-for _ in range(fps - 1):
+frames = round(fps * seconds)
+for _ in range(frames - 1):
     frame()
 wp.synchronize()
-wall = (time.perf_counter() - t) * fps / (fps - 1)
-np.savez(out, points=states[0].particle_q.numpy(), setup_seconds=setup, wall_seconds=wall, simulated_seconds=1.0)
+wall = (time.perf_counter() - t) * frames / (frames - 1)
+np.savez(out, points=states[0].particle_q.numpy(), setup_seconds=setup, wall_seconds=wall, simulated_seconds=frames / fps)
