@@ -55,7 +55,7 @@ def main() -> None:
     parser.add_argument("--systems", nargs="+", default=["party-implicit", "party-explicit", "blender", "newton"],
                         choices=["party-implicit", "party-explicit", "blender", "newton"])
     parser.add_argument("--seconds", type=float, default=1.0,
-                        help="simulated seconds of the sphere drop (at 1 s the cloth still slides; it settles over several)")
+                        help="simulated seconds of the sphere drop (at 1 s the cloth still slides)")
     parser.add_argument("--garments", action=argparse.BooleanOptionalAction, default=True)
     parser.add_argument("--peer-timeout", type=float, default=1200.0, help="seconds before a peer run is stopped")
     parser.add_argument("--out", type=Path, default=HERE / "results")
@@ -216,7 +216,8 @@ def report(rows: list[dict], out: Path) -> None:
     for r in rows:
         if "wall_per_simulated_second" in r:
             reference = implicit.get(r["scene"])
-            ratio = r["wall_per_simulated_second"] / reference["wall_per_simulated_second"] if reference else float("nan")
+            ratio = (r["wall_per_simulated_second"] / reference["wall_per_simulated_second"] if reference
+                     else float("nan"))
             r["ratio_to_party_implicit"] = ratio
             shape = equal = ""
             if reference is not None:

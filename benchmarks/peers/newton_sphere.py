@@ -56,4 +56,5 @@ for _ in range(frames - 1):
     frame()
 wp.synchronize()
 wall = (time.perf_counter() - t) * frames / (frames - 1)
-np.savez(out, points=states[0].particle_q.numpy(), setup_seconds=setup, wall_seconds=wall, simulated_seconds=frames / fps)
+np.savez(out, points=states[0].particle_q.numpy(), setup_seconds=setup, wall_seconds=wall,
+         simulated_seconds=frames / fps)
