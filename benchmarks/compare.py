@@ -220,7 +220,7 @@ def report(rows: list[dict], out: Path) -> None:
                      else float("nan"))
             r["ratio_to_party_implicit"] = ratio
             shape = equal = ""
-            if reference is not None:
+            if reference is not None and not (r["nan"] or reference["nan"]):
                 mean, largest = shape_distance(r["points"], reference["points"])
                 r["shape_mean_m"], r["shape_max_m"] = mean, largest
                 r["equal_outcome"] = r["nodes_inside"] == 0 and largest <= SAME_SHAPE
