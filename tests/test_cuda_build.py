@@ -20,15 +20,17 @@ def _kernel_modules() -> list[str]:
     return [name for name in names if wp.get_module(name).kernels]
 
 
+KERNEL_MODULES = _kernel_modules()
+
+
 def test_the_package_has_kernels_in_every_stage_that_steps():
-    modules = _kernel_modules()
     for stage in ("party.collision.body", "party.collision.cloth", "party.solvers.explicit.kernels",
                   "party.solvers.implicit.kernels"):
-        assert stage in modules
+        assert stage in KERNEL_MODULES
 
 
 @pytest.mark.skipif(wp.get_cuda_toolkit_version() == (0, 0), reason="this Warp build has no CUDA compiler (NVRTC)")
-@pytest.mark.parametrize("name", _kernel_modules())
+@pytest.mark.parametrize("name", KERNEL_MODULES)
 def test_kernels_compile_for_cuda(name, tmp_path):
     wp.compile_aot_module(name, arch=ARCH, module_dir=str(tmp_path), use_ptx=True)
     ptx = list(tmp_path.glob(f"*{name}*.sm{ARCH}.ptx"))
