@@ -231,11 +231,11 @@ def report(rows: list[dict], out: Path) -> None:
         else:
             table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "")
     Console(width=200).print(table)
-    keys = sorted({k for r in rows for k in r if k != "points"})
+    plain = [{k: v for k, v in r.items() if k != "points"} for r in rows]
     with open(out / "compare.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=keys)
+        writer = csv.DictWriter(f, fieldnames=sorted({k for r in plain for k in r}))
         writer.writeheader()
-        writer.writerows([{k: v for k, v in r.items() if k != "points"} for r in rows])
+        writer.writerows(plain)
     chart(rows, out / "compare.png")
     print(f"wrote {out / 'compare.csv'} and {out / 'compare.png'}")
 
