@@ -22,6 +22,12 @@ Warp's CPU atomics are plain read-modify-writes, so a kernel launched this way m
 accumulate into shared memory; a counter it bumps (``wp.atomic_add``) may lose increments
 between chunks, though it stays non-zero when any was made. ``$PARTY_THREADS`` sets the number
 of threads (default: the cores this process may use).
+
+A loop of many short dependent launches (the implicit solver's sweeps: one launch per colour of
+nodes, some tens of microseconds each) gains nothing from a thread handoff per launch. There
+:func:`launch_workers` starts one launch per thread, once, each worker taking its share of every
+pass and meeting the others at :func:`worker_barrier` between passes (a spin on an atomic
+counter: some microseconds, against 110 us for a handoff).
 """
 
 from __future__ import annotations
@@ -33,6 +39,10 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Sequence
 
 import warp as wp
+
+WORKER_SPINS = (1 << 31) - 1
+"""Spins at a :func:`worker_barrier` before a worker gives up on the others (minutes): a worker
+that never arrives is a bug, which this turns into an error rather than a hang."""
 
 MIN_CHUNK = 1024
 """Fewest items worth a thread of their own."""
@@ -66,16 +76,24 @@ def launch(kernel: Any, dim: int | tuple[int, ...], inputs: Sequence[Any], outpu
     key = None if device.is_capturing else _call_key(kernel, dim, inputs, outputs, device)
     if key is None:
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
-        return
-    command = _recorded.get(key)
+    else:
+        _recorded_launch(key, kernel, dim, inputs, outputs, device).launch()
+
+
+def _recorded_launch(key: tuple | None, kernel: Any, dim: Any, inputs: Sequence[Any], outputs: Sequence[Any],
+                     device: Any) -> Any:
+    """The recorded launch kept for the call ``key`` (:func:`_call_key`), recorded now if none
+    was; one with ``key`` None is recorded and not kept."""
+    command = _recorded.get(key) if key is not None else None
     if command is None:
         command = wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device, record_cmd=True)
-        _recorded[key] = command
-        if len(_recorded) > MAX_RECORDED:
-            _recorded.popitem(last=False)
+        if key is not None:
+            _recorded[key] = command
+            if len(_recorded) > MAX_RECORDED:
+                _recorded.popitem(last=False)
     else:
         _recorded.move_to_end(key)
-    command.launch()
+    return command
 
 
 def _call_key(kernel: Any, dim: Any, inputs: Sequence[Any], outputs: Sequence[Any], device: Any) -> tuple | None:
@@ -95,6 +113,34 @@ def _call_key(kernel: Any, dim: Any, inputs: Sequence[Any], outputs: Sequence[An
         else:
             return None
     return tuple(parts)
+
+
+@wp.func_native("""
+#if !defined(__CUDA_ARCH__)
+int* counter = (int*)sync.data;
+int generation = __atomic_load_n(counter + 1, __ATOMIC_ACQUIRE);
+if (__atomic_add_fetch(counter, 1, __ATOMIC_ACQ_REL) == workers) {
+    __atomic_store_n(counter, 0, __ATOMIC_RELAXED);
+    __atomic_store_n(counter + 1, generation + 1, __ATOMIC_RELEASE);
+} else {
+    long long spins = 0;
+    while (__atomic_load_n(counter + 1, __ATOMIC_ACQUIRE) == generation) {
+        if (__atomic_load_n(counter + 2, __ATOMIC_RELAXED) != 0 || ++spins > max_spins) {
+            __atomic_store_n(counter + 2, 1, __ATOMIC_RELAXED);
+            break;
+        }
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+    }
+}
+#endif
+""")
+def worker_barrier(sync: wp.array(dtype=int), workers: int, max_spins: int):
+    """Wait until all ``workers`` of a :func:`launch_workers` launch have arrived here; what each
+    wrote before is then visible to all. ``sync``: the launch's three counters (arrivals,
+    generation, failed). On CUDA a launch has one worker, and this does nothing."""
+    ...
 
 
 def thread_count() -> int:
@@ -134,15 +180,57 @@ def launch_items(kernel: Any, first: int, count: int, inputs: Sequence[Any], dev
         seconds = (time.perf_counter() - started) / count
         _item_seconds[key] = seconds if per_item is None else 0.9 * per_item + 0.1 * seconds
         return
-    global _pool, _pool_threads
-    if _pool_threads < threads - 1:
-        if _pool is not None:
-            _pool.shutdown(wait=False)
-        _pool = ThreadPoolExecutor(max_workers=threads - 1, thread_name_prefix="party-launch")
-        _pool_threads = threads - 1
+    pool = _thread_pool(threads - 1)
     bounds = [first + count * k // threads for k in range(threads + 1)]
-    others = [_pool.submit(launch, kernel, bounds[k + 1] - bounds[k], [bounds[k], *inputs], device=device)
+    others = [pool.submit(launch, kernel, bounds[k + 1] - bounds[k], [bounds[k], *inputs], device=device)
               for k in range(1, threads)]
     launch(kernel, bounds[1] - bounds[0], [bounds[0], *inputs], device=device)
     for other in others:
         other.result()
+
+
+class WorkersLost(RuntimeError):
+    """A worker of :func:`launch_workers` waited at a barrier for the others in vain."""
+
+
+def worker_count(items: int, device: Any = None) -> int:
+    """Workers :func:`launch_workers` would use for ``items`` items per pass: up to
+    :func:`thread_count` on the CPU, at least :data:`MIN_CHUNK` items each; 1 on CUDA."""
+    if wp.get_device(device).is_cuda:
+        return 1
+    return max(1, min(thread_count(), items // MIN_CHUNK))
+
+
+def launch_workers(kernel: Any, workers: int, sync: wp.array, inputs: Sequence[Any], device: Any = None) -> None:
+    """Launch ``kernel`` once per worker (``dim=1``), each on its own CPU thread at once (the CPU
+    only: see :func:`worker_count`); its first
+    arguments are the worker's index, the number of workers, ``sync`` and
+    :data:`WORKER_SPINS`, ``inputs`` the rest. The workers meet at :func:`worker_barrier`
+    (``sync``: three zeroed ints, left zeroed). Every launch is prepared before any runs,
+    so that none can fail while the others wait for it. One worker is a plain launch."""
+    device = wp.get_device(device)
+    if workers <= 1:
+        launch(kernel, 1, [0, 1, sync, WORKER_SPINS, *inputs], device=device)
+        return
+    commands = []
+    for worker in range(workers):
+        arguments = [worker, workers, sync, WORKER_SPINS, *inputs]
+        commands.append(_recorded_launch(_call_key(kernel, 1, arguments, (), device), kernel, 1, arguments, (), device))
+    others = [_thread_pool(workers - 1).submit(command.launch) for command in commands[1:]]
+    commands[0].launch()
+    for other in others:
+        other.result()
+    if int(sync.numpy()[2]):
+        sync.zero_()
+        raise WorkersLost(f"{kernel.key}: a worker waited {WORKER_SPINS} spins for the others")
+
+
+def _thread_pool(threads: int) -> ThreadPoolExecutor:
+    """The pool of threads that run launches beside the calling thread, with at least ``threads``."""
+    global _pool, _pool_threads
+    if _pool is None or _pool_threads < threads:
+        if _pool is not None:
+            _pool.shutdown(wait=False)
+        _pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="party-launch")
+        _pool_threads = threads
+    return _pool

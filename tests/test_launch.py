@@ -93,3 +93,49 @@ def test_recorded_launches_are_bounded(monkeypatch):
         launch.launch(_scale_into, 3, [values, factor], [out], device="cpu")
     assert len(launch._recorded) == 2
     assert np.array_equal(out.numpy(), [3, 3, 3])
+
+
+@wp.kernel
+def _pass_around(worker: int, workers: int, sync: wp.array(dtype=int), max_spins: int, rounds: int,
+                 even: wp.array(dtype=float), odd: wp.array(dtype=float)):
+    """Each round, every worker fills its share of one array from values of the other array
+    that other workers wrote in the round before."""
+    n = even.shape[0]
+    for r in range(rounds):
+        source = even
+        target = odd
+        if r % 2 == 1:
+            source = odd
+            target = even
+        for i in range(n * worker // workers, n * (worker + 1) // workers):
+            target[i] = 0.5 * source[(i + n // 2) % n] + source[(i + 1) % n] * 0.25 + float(i % 7)
+        launch.worker_barrier(sync, workers, max_spins)
+
+
+@wp.kernel
+def _one_stays_away(worker: int, workers: int, sync: wp.array(dtype=int), max_spins: int):
+    if worker == 0:
+        launch.worker_barrier(sync, workers, max_spins)
+
+
+def test_workers_meeting_at_barriers_give_what_one_worker_gives(monkeypatch):
+    """Three workers each take a third of every round; a round reads values the others wrote in
+    the last (a missing barrier would let a worker read stale ones)."""
+    monkeypatch.setenv("PARTY_THREADS", "3")
+    results = []
+    for workers in (1, 3):
+        even = wp.array(np.arange(3001, dtype=np.float32), dtype=float, device="cpu")
+        odd = wp.zeros(3001, dtype=float, device="cpu")
+        sync = wp.zeros(3, dtype=int, device="cpu")
+        launch.launch_workers(_pass_around, workers, sync, [200, even, odd], "cpu")
+        results.append(even.numpy())
+        assert sync.numpy().tolist()[0::2] == [0, 0]
+    assert np.array_equal(results[0], results[1])
+
+
+def test_a_worker_that_never_arrives_is_an_error_not_a_hang(monkeypatch):
+    monkeypatch.setattr(launch, "WORKER_SPINS", 10000)
+    sync = wp.zeros(3, dtype=int, device="cpu")
+    with pytest.raises(launch.WorkersLost, match="^_one_stays_away: a worker waited 10000 spins for the others$"):
+        launch.launch_workers(_one_stays_away, 2, sync, [], "cpu")
+    assert sync.numpy().tolist() == [0, 0, 0]

@@ -3,6 +3,7 @@ potential (Chen, Macklin, Macklin, Yuksel, Kim: "Vertex Block Descent", SIGGRAPH
 
 import warp as wp
 
+from ...launch import worker_barrier
 from ..explicit.kernels import stencil_curvature
 from ..hysteresis import slider_moment
 
@@ -89,10 +90,9 @@ def membrane_gradient(x: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim
     return terms
 
 
-@wp.kernel
-def block_descent(
-    first: int,
-    colored: wp.array(dtype=int),
+@wp.func
+def descend_node(
+    i: int,
     x_start: wp.array(dtype=wp.vec3),
     y: wp.array(dtype=wp.vec3),
     mass: wp.array(dtype=float),
@@ -136,7 +136,6 @@ def block_descent(
     returned moment (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the
     step's start in ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
     """
-    i = colored[first + wp.tid()]
     if inv_mass[i] == 0.0:
         return
     xi = x[i]
@@ -189,6 +188,106 @@ def block_descent(
 
 
 @wp.kernel
+def block_descent(
+    first: int,
+    colored: wp.array(dtype=int),
+    x_start: wp.array(dtype=wp.vec3),
+    y: wp.array(dtype=wp.vec3),
+    mass: wp.array(dtype=float),
+    inv_mass: wp.array(dtype=float),
+    spring_offsets: wp.array(dtype=int),
+    spring_other: wp.array(dtype=int),
+    spring_params: wp.array(dtype=wp.vec3),
+    bend_offsets: wp.array(dtype=int),
+    bend_nodes: wp.array(dtype=int),
+    bend_values: wp.array(dtype=float),
+    tri_offsets: wp.array(dtype=int),
+    tri_slots: wp.array(dtype=int),
+    tris: wp.array(dtype=int, ndim=2),
+    inv_rest: wp.array(dtype=wp.mat22),
+    membrane_area: wp.array(dtype=float),
+    membrane_c: wp.array(dtype=wp.mat33),
+    slider_offsets: wp.array(dtype=int),
+    slider_slots: wp.array(dtype=int),
+    hinge_nodes: wp.array(dtype=wp.vec4i),
+    hinge_weights: wp.array(dtype=wp.vec4),
+    hinge_friction: wp.array(dtype=float),
+    hinge_slip_limit: wp.array(dtype=float),
+    slip_world: wp.array(dtype=wp.vec3),
+    dt: float,
+    x: wp.array(dtype=wp.vec3),
+):
+    """:func:`descend_node` for the nodes ``colored[first + tid]`` (one colour)."""
+    descend_node(colored[first + wp.tid()], x_start, y, mass, inv_mass, spring_offsets, spring_other,
+                 spring_params, bend_offsets, bend_nodes, bend_values, tri_offsets, tri_slots, tris, inv_rest,
+                 membrane_area, membrane_c, slider_offsets, slider_slots, hinge_nodes, hinge_weights, hinge_friction,
+                 hinge_slip_limit, slip_world, dt, x)
+
+
+@wp.kernel
+def sweep_workers(
+    worker: int,
+    workers: int,
+    sync: wp.array(dtype=int),
+    max_spins: int,
+    iterations: int,
+    color_offsets: wp.array(dtype=int),
+    omegas: wp.array(dtype=float),
+    colored: wp.array(dtype=int),
+    x_start: wp.array(dtype=wp.vec3),
+    y: wp.array(dtype=wp.vec3),
+    mass: wp.array(dtype=float),
+    inv_mass: wp.array(dtype=float),
+    spring_offsets: wp.array(dtype=int),
+    spring_other: wp.array(dtype=int),
+    spring_params: wp.array(dtype=wp.vec3),
+    bend_offsets: wp.array(dtype=int),
+    bend_nodes: wp.array(dtype=int),
+    bend_values: wp.array(dtype=float),
+    tri_offsets: wp.array(dtype=int),
+    tri_slots: wp.array(dtype=int),
+    tris: wp.array(dtype=int, ndim=2),
+    inv_rest: wp.array(dtype=wp.mat22),
+    membrane_area: wp.array(dtype=float),
+    membrane_c: wp.array(dtype=wp.mat33),
+    slider_offsets: wp.array(dtype=int),
+    slider_slots: wp.array(dtype=int),
+    hinge_nodes: wp.array(dtype=wp.vec4i),
+    hinge_weights: wp.array(dtype=wp.vec4),
+    hinge_friction: wp.array(dtype=float),
+    hinge_slip_limit: wp.array(dtype=float),
+    slip_world: wp.array(dtype=wp.vec3),
+    dt: float,
+    x: wp.array(dtype=wp.vec3),
+    x_previous: wp.array(dtype=wp.vec3),
+    x_before: wp.array(dtype=wp.vec3),
+):
+    """All of a step's sweeps as one worker of :func:`~party.launch.launch_workers`: the worker
+    takes its share of each colour's nodes (:func:`descend_node`) and of the Chebyshev blend
+    (``omegas[k]`` of sweep k; none where ``omegas`` is empty), the workers meeting between
+    them. Each node's arithmetic is that of :func:`block_descent` and :func:`chebyshev_blend`,
+    so the result is bit for bit that of the launches one colour at a time."""
+    for iteration in range(iterations):
+        for c in range(color_offsets.shape[0] - 1):
+            first = color_offsets[c]
+            count = color_offsets[c + 1] - first
+            for j in range(first + count * worker // workers, first + count * (worker + 1) // workers):
+                descend_node(colored[j], x_start, y, mass, inv_mass, spring_offsets, spring_other, spring_params,
+                             bend_offsets, bend_nodes, bend_values, tri_offsets, tri_slots, tris, inv_rest,
+                             membrane_area, membrane_c, slider_offsets, slider_slots, hinge_nodes, hinge_weights,
+                             hinge_friction, hinge_slip_limit, slip_world, dt, x)
+            worker_barrier(sync, workers, max_spins)
+        if omegas.shape[0] > 0:
+            n = x.shape[0]
+            for i in range(n * worker // workers, n * (worker + 1) // workers):
+                if iteration == 0:
+                    x_previous[i] = x[i]
+                else:
+                    blend_node(i, x, x_previous, x_before, omegas[iteration])
+            worker_barrier(sync, workers, max_spins)
+
+
+@wp.kernel
 def step_velocity(x_start: wp.array(dtype=wp.vec3), x_end: wp.array(dtype=wp.vec3), dt: float,
                   x_out: wp.array(dtype=wp.vec3), v_out: wp.array(dtype=wp.vec3)):
     """v* = (x_end - x(t)) / dt, and x_out = x(t) for the collision pass and eq. (4)."""
@@ -201,9 +300,15 @@ def step_velocity(x_start: wp.array(dtype=wp.vec3), x_end: wp.array(dtype=wp.vec
 def chebyshev_blend(x: wp.array(dtype=wp.vec3), previous: wp.array(dtype=wp.vec3), before: wp.array(dtype=wp.vec3),
                     omega: float):
     """Chebyshev semi-iterative acceleration of the sweeps (Wang 2015; used by VBD):
-    x_k <- omega (x_k - x_{k-2}) + x_{k-2}; then shift the history (``previous`` = x_{k-1}
+    :func:`blend_node` for every node."""
+    blend_node(wp.tid(), x, previous, before, omega)
+
+
+@wp.func
+def blend_node(i: int, x: wp.array(dtype=wp.vec3), previous: wp.array(dtype=wp.vec3),
+               before: wp.array(dtype=wp.vec3), omega: float):
+    """x_k <- omega (x_k - x_{k-2}) + x_{k-2}; then shift the history (``previous`` = x_{k-1}
     becomes x_{k-2} in ``before``, and x_k becomes ``previous``)."""
-    i = wp.tid()
     xk = omega * (x[i] - before[i]) + before[i]
     x[i] = xk
     before[i] = previous[i]

@@ -10,14 +10,15 @@ import warp as wp
 
 from ...collision import CollisionSettings
 from ...errors import InvalidInput
-from ...launch import launch, launch_items
+from ...launch import launch, launch_items, launch_workers, worker_count
 from ...model import Control, Model, State
 from ...model.csr import csr_order
 from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
-from .kernels import block_descent, chebyshev_blend, inertial_target, record_correction, step_velocity
+from .kernels import (block_descent, chebyshev_blend, inertial_target, record_correction, step_velocity,
+                      sweep_workers)
 
 
 SLIDER_STEP_RATIO = 100.0
@@ -106,6 +107,11 @@ class SolverImplicit:
         color_offsets, colored = color_nodes(model)
         self.color_offsets = color_offsets
         self._colored = wp.array(colored, dtype=int, device=dev)
+        self._color_offsets = wp.array(color_offsets, dtype=int, device=dev)
+        self._omega_values = chebyshev_weights(self.iterations, self.chebyshev)
+        self._omegas = wp.array(self._omega_values, dtype=float, device=dev)
+        self._sync = wp.zeros(3, dtype=int, device=dev)
+        self.workers = worker_count(len(colored), dev)
         self._graphs: dict = {}
         self._capture = True
 
@@ -140,7 +146,7 @@ class SolverImplicit:
         key = (state_in.node_q.ptr, state_in.node_qd.ptr, state_out.node_q.ptr, state_out.node_qd.ptr,
                control.kinematic_velocity.ptr, float(dt))
         graph = self._graphs.get(key)
-        if graph is None and self._capture:
+        if graph is None and self._capture and self.workers == 1:
             if len(self._graphs) >= 8:  # state pairs: two swapped states, and a scratch one for substeps
                 self._graphs.clear()
             try:
@@ -160,7 +166,9 @@ class SolverImplicit:
 
     def _solve(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
         """The implicit solve, from state_in to v* in state_out: launches only, no host reads,
-        so that it can be recorded once as a graph and replayed."""
+        so that it can be recorded once as a graph and replayed. With several :attr:`workers`
+        (CPU threads, :func:`~party.launch.launch_workers`) the sweeps are one launch per
+        thread instead, and nothing is recorded: a CPU graph replays on one thread."""
         m = self.model
         dev = m.device
         launch(inertial_target, dim=m.node_count,
@@ -170,29 +178,52 @@ class SolverImplicit:
             launch(slip_in_world, dim=m.hinge_count,
                    inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
                    device=dev)
-        offsets = self.color_offsets
-        omega = 1.0
         wp.copy(self._x_before, self._x)
-        for iteration in range(self.iterations):
-            for c in range(len(offsets) - 1):
-                launch_items(block_descent, offsets[c], offsets[c + 1] - offsets[c],
-                             [self._colored, state_in.node_q, self._y, m.node_mass, m.node_inv_mass, self._spring_offsets,
-                              self._spring_other, self._spring_params, self._bend_offsets, self._bend_nodes,
-                              self._bend_values, self._tri_offsets, self._tri_slots, m.triangle_nodes, m.triangle_inv_rest,
-                              m.triangle_membrane_area, m.triangle_membrane_c, self._slider_offsets, self._slider_slots,
-                              m.hinge_nodes, m.hinge_weights, m.hinge_friction, m.hinge_slip_limit, self._slip_world,
-                              dt, self._x], dev)
-            if self.chebyshev > 0.0:
-                if iteration == 0:
-                    wp.copy(self._x_previous, self._x)
-                    continue
-                rho2 = self.chebyshev ** 2
-                omega = 2.0 / (2.0 - rho2) if iteration == 1 else 4.0 / (4.0 - rho2 * omega)
-                launch(chebyshev_blend, dim=m.node_count, inputs=[self._x, self._x_previous, self._x_before, omega],
-                       device=dev)
+        descent = [state_in.node_q, self._y, m.node_mass, m.node_inv_mass, self._spring_offsets, self._spring_other,
+                   self._spring_params, self._bend_offsets, self._bend_nodes, self._bend_values, self._tri_offsets,
+                   self._tri_slots, m.triangle_nodes, m.triangle_inv_rest, m.triangle_membrane_area,
+                   m.triangle_membrane_c, self._slider_offsets, self._slider_slots, m.hinge_nodes, m.hinge_weights,
+                   m.hinge_friction, m.hinge_slip_limit, self._slip_world, dt, self._x]
+        if self.workers > 1:
+            launch_workers(sweep_workers, self.workers, self._sync,
+                           [self.iterations, self._color_offsets, self._omegas, self._colored, *descent,
+                            self._x_previous, self._x_before], dev)
+        else:
+            self._sweep_by_colour(descent)
         launch(record_correction, dim=m.node_count, inputs=[self._x, self._y, self._correction], device=dev)
         launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._x, dt],
                outputs=[state_out.node_q, state_out.node_qd], device=dev)
+
+    def _sweep_by_colour(self, descent: list) -> None:
+        """The sweeps as one launch per colour and one per Chebyshev blend (``descent``: the
+        block descent's arguments after the colour's nodes)."""
+        offsets = self.color_offsets
+        omegas = self._omega_values
+        for iteration in range(self.iterations):
+            for c in range(len(offsets) - 1):
+                launch_items(block_descent, offsets[c], offsets[c + 1] - offsets[c], [self._colored, *descent],
+                             self.model.device)
+            if len(omegas) == 0:
+                continue
+            if iteration == 0:
+                wp.copy(self._x_previous, self._x)
+                continue
+            launch(chebyshev_blend, dim=self.model.node_count,
+                   inputs=[self._x, self._x_previous, self._x_before, float(omegas[iteration])], device=self.model.device)
+
+
+def chebyshev_weights(iterations: int, rho: float) -> np.ndarray:
+    """Chebyshev's omega for each sweep after the first (Wang 2015), float32 as the kernels
+    take it: omega_1 = 2 / (2 - rho^2), omega_k = 4 / (4 - rho^2 omega_{k-1}); entry 0 is
+    unused. Empty for rho = 0 (no acceleration)."""
+    if rho <= 0.0:
+        return np.zeros(0, np.float32)
+    weights = np.zeros(iterations, np.float64)
+    omega = 1.0
+    for k in range(1, iterations):
+        omega = 2.0 / (2.0 - rho * rho) if k == 1 else 4.0 / (4.0 - rho * rho * omega)
+        weights[k] = omega
+    return weights.astype(np.float32)
 
 
 def node_springs(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
