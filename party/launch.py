@@ -194,11 +194,13 @@ class WorkersLost(RuntimeError):
 
 
 def worker_count(items: int, device: Any = None) -> int:
-    """Workers :func:`launch_workers` would use for ``items`` items per pass: up to
-    :func:`thread_count` on the CPU, at least :data:`MIN_CHUNK` items each; 1 on CUDA."""
+    """Workers :func:`launch_workers` should use for ``items`` items per pass: up to
+    :func:`thread_count` on the CPU, but no more than the cores this process may use (a worker
+    spinning at a barrier holds its core, so one waiting for a core would stall the others for
+    the scheduler's time slice), at least :data:`MIN_CHUNK` items each; 1 on CUDA."""
     if wp.get_device(device).is_cuda:
         return 1
-    return max(1, min(thread_count(), items // MIN_CHUNK))
+    return max(1, min(thread_count(), _CORES, items // MIN_CHUNK))
 
 
 def launch_workers(kernel: Any, workers: int, sync: wp.array, inputs: Sequence[Any], device: Any = None) -> None:
