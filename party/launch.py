@@ -204,12 +204,12 @@ def worker_count(items: int, device: Any = None) -> int:
 
 
 def launch_workers(kernel: Any, workers: int, sync: wp.array, inputs: Sequence[Any], device: Any = None) -> None:
-    """Launch ``kernel`` once per worker (``dim=1``), each on its own CPU thread at once (the CPU
-    only: see :func:`worker_count`); its first
-    arguments are the worker's index, the number of workers, ``sync`` and
-    :data:`WORKER_SPINS`, ``inputs`` the rest. The workers meet at :func:`worker_barrier`
-    (``sync``: three zeroed ints, left zeroed). Every launch is prepared before any runs,
-    so that none can fail while the others wait for it. One worker is a plain launch."""
+    """Launch ``kernel`` once per worker (``dim=1``), each on its own CPU thread at once (for the
+    CPU: see :func:`worker_count`). The kernel's first arguments are the worker's index, the
+    number of workers, ``sync`` and :data:`WORKER_SPINS`; ``inputs`` are the rest. The workers
+    meet at :func:`worker_barrier` (``sync``: three zeroed ints, left zeroed). Every launch is
+    prepared before any runs, so that none can fail while the others wait for it. One worker is
+    a plain launch. Raises :class:`WorkersLost` where a worker waited in vain."""
     device = wp.get_device(device)
     if workers <= 1:
         launch(kernel, 1, [0, 1, sync, WORKER_SPINS, *inputs], device=device)
