@@ -16,3 +16,8 @@ class InvalidInput(PartyError):
 
 class SimulationUnstable(PartyError):
     """The integration blew up (non-finite or runaway velocities)."""
+
+
+class WorkersLost(PartyError):
+    """CPU threads sharing a launch (:func:`party.launch.launch_workers`) waited for one another
+    in vain; one thread (``PARTY_THREADS=1``) avoids them."""

@@ -69,9 +69,9 @@ def launch(kernel: Any, dim: int | tuple[int, ...], inputs: Sequence[Any], outpu
            device: Any = None) -> None:
     """``wp.launch(kernel, dim, inputs, outputs, device)``, replayed from a recorded launch when
     the same call was made before: the same kernel and dimensions, the same array objects
-    (other array kinds: the same address, shape and strides) and the same scalar values. Calls
-    with other arguments (structs), and any while a graph is being captured, are plain
-    launches."""
+    (other array kinds: the same address, shape and strides), the same scalar values and
+    structs with the same fields. Calls with other arguments, and any while a graph is being
+    captured, are plain launches."""
     device = wp.get_device(device)
     key = None if device.is_capturing else _call_key(kernel, dim, inputs, outputs, device)
     if key is None:
@@ -101,17 +101,37 @@ def _call_key(kernel: Any, dim: Any, inputs: Sequence[Any], outputs: Sequence[An
     covered (it is then launched plainly)."""
     parts: list[Any] = [kernel, dim, device.alias]
     for arg in (*inputs, *outputs):
-        kind = type(arg)
-        if kind is wp.array:
+        if type(arg) is wp.array:
             parts.append(id(arg))  # the record holds on to the array, so no other object can take its id
-        elif kind in _SCALARS:
-            parts.append((kind, arg))
-        elif isinstance(arg, wp.array):
-            parts.append((arg.ptr, arg.shape, arg.strides))
-        elif hasattr(arg, "_length_"):  # Warp's vector and matrix values
-            parts.append((type(arg), tuple(arg)))
-        else:
+            continue
+        part = _value_key(arg)
+        if part is None:
             return None
+        parts.append(part)
+    return tuple(parts)
+
+
+def _value_key(arg: Any) -> tuple | None:
+    """What a recorded launch packs of an argument: an array's address, shape and strides, a
+    scalar's, vector's or matrix's value, a struct's fields (so a struct whose fields were
+    changed is recorded anew); None for other kinds."""
+    kind = type(arg)
+    if kind in _SCALARS:
+        return (kind, arg)
+    if isinstance(arg, wp.array):
+        return (arg.ptr, arg.shape, arg.strides)
+    if hasattr(arg, "_length_"):  # Warp's vector and matrix values
+        return (kind, tuple(arg))
+    fields = getattr(getattr(arg, "_cls", None), "vars", None)  # a Warp struct
+    if fields is None:
+        return None
+    parts = [kind]
+    for name in fields:
+        value = getattr(arg, name)
+        part = ("unset",) if value is None else _value_key(value)
+        if part is None:
+            return None
+        parts.append(part)
     return tuple(parts)
 
 
@@ -189,10 +209,6 @@ def launch_items(kernel: Any, first: int, count: int, inputs: Sequence[Any], dev
         other.result()
 
 
-class WorkersLost(RuntimeError):
-    """A worker of :func:`launch_workers` waited at a barrier for the others in vain."""
-
-
 def worker_count(items: int, device: Any = None) -> int:
     """Workers :func:`launch_workers` should use for ``items`` items per pass: up to
     :func:`thread_count` on the CPU, but no more than the cores this process may use (a worker
@@ -209,7 +225,7 @@ def launch_workers(kernel: Any, workers: int, sync: wp.array, inputs: Sequence[A
     number of workers, ``sync`` and :data:`WORKER_SPINS`; ``inputs`` are the rest. The workers
     meet at :func:`worker_barrier` (``sync``: three zeroed ints, left zeroed). Every launch is
     prepared before any runs, so that none can fail while the others wait for it. One worker is
-    a plain launch. Raises :class:`WorkersLost` where a worker waited in vain."""
+    a plain launch. Raises :class:`~party.errors.WorkersLost` where a worker waited in vain."""
     device = wp.get_device(device)
     if workers <= 1:
         launch(kernel, 1, [0, 1, sync, WORKER_SPINS, *inputs], device=device)
@@ -224,7 +240,10 @@ def launch_workers(kernel: Any, workers: int, sync: wp.array, inputs: Sequence[A
         other.result()
     if int(sync.numpy()[2]):
         sync.zero_()
-        raise WorkersLost(f"{kernel.key}: a worker waited {WORKER_SPINS} spins for the others")
+        from .errors import WorkersLost
+
+        raise WorkersLost(f"{kernel.key}: a worker thread waited {WORKER_SPINS} spins for the others; "
+                          "rerun with PARTY_THREADS=1")
 
 
 def _thread_pool(threads: int) -> ThreadPoolExecutor:

@@ -90,35 +90,39 @@ def membrane_gradient(x: wp.array(dtype=wp.vec3), tris: wp.array(dtype=int, ndim
     return terms
 
 
+@wp.struct
+class DescentTerms:
+    """What a node's block descent (:func:`descend_node`) reads besides the positions: the
+    inertial targets ``y`` [m], masses [kg], each node's elements (``spring_*``), bending rows
+    (``bend_*``), membrane triangles (``tri_*``, ``tris``, ``inv_rest``, ``membrane_*``) and
+    bending-hysteresis sliders (``slider_*``, ``hinge_*``, ``slip_world``); set up once per solver."""
+
+    y: wp.array(dtype=wp.vec3)
+    mass: wp.array(dtype=float)
+    inv_mass: wp.array(dtype=float)
+    spring_offsets: wp.array(dtype=int)
+    spring_other: wp.array(dtype=int)
+    spring_params: wp.array(dtype=wp.vec3)
+    bend_offsets: wp.array(dtype=int)
+    bend_nodes: wp.array(dtype=int)
+    bend_values: wp.array(dtype=float)
+    tri_offsets: wp.array(dtype=int)
+    tri_slots: wp.array(dtype=int)
+    tris: wp.array(dtype=int, ndim=2)
+    inv_rest: wp.array(dtype=wp.mat22)
+    membrane_area: wp.array(dtype=float)
+    membrane_c: wp.array(dtype=wp.mat33)
+    slider_offsets: wp.array(dtype=int)
+    slider_slots: wp.array(dtype=int)
+    hinge_nodes: wp.array(dtype=wp.vec4i)
+    hinge_weights: wp.array(dtype=wp.vec4)
+    hinge_friction: wp.array(dtype=float)
+    hinge_slip_limit: wp.array(dtype=float)
+    slip_world: wp.array(dtype=wp.vec3)
+
+
 @wp.func
-def descend_node(
-    i: int,
-    x_start: wp.array(dtype=wp.vec3),
-    y: wp.array(dtype=wp.vec3),
-    mass: wp.array(dtype=float),
-    inv_mass: wp.array(dtype=float),
-    spring_offsets: wp.array(dtype=int),
-    spring_other: wp.array(dtype=int),
-    spring_params: wp.array(dtype=wp.vec3),
-    bend_offsets: wp.array(dtype=int),
-    bend_nodes: wp.array(dtype=int),
-    bend_values: wp.array(dtype=float),
-    tri_offsets: wp.array(dtype=int),
-    tri_slots: wp.array(dtype=int),
-    tris: wp.array(dtype=int, ndim=2),
-    inv_rest: wp.array(dtype=wp.mat22),
-    membrane_area: wp.array(dtype=float),
-    membrane_c: wp.array(dtype=wp.mat33),
-    slider_offsets: wp.array(dtype=int),
-    slider_slots: wp.array(dtype=int),
-    hinge_nodes: wp.array(dtype=wp.vec4i),
-    hinge_weights: wp.array(dtype=wp.vec4),
-    hinge_friction: wp.array(dtype=float),
-    hinge_slip_limit: wp.array(dtype=float),
-    slip_world: wp.array(dtype=wp.vec3),
-    dt: float,
-    x: wp.array(dtype=wp.vec3),
-):
+def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float, x: wp.array(dtype=wp.vec3)):
     """One Newton step on one node's share of the incremental potential
 
         G_i(x_i) = m_i / (2 dt^2) |x_i - y_i|^2 + E_springs + E_dampers + E_hinges,
@@ -136,18 +140,18 @@ def descend_node(
     returned moment (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the
     step's start in ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
     """
-    if inv_mass[i] == 0.0:
+    if terms.inv_mass[i] == 0.0:
         return
     xi = x[i]
     h2 = dt * dt
-    m = mass[i]
-    grad = (m / h2) * (xi - y[i])
+    m = terms.mass[i]
+    grad = (m / h2) * (xi - terms.y[i])
     hess = (m / h2) * wp.identity(n=3, dtype=float)
     vi = xi - x_start[i]
     diagonal = float(0.0)
-    for j in range(spring_offsets[i], spring_offsets[i + 1]):
-        k = spring_other[j]
-        p = spring_params[j]
+    for j in range(terms.spring_offsets[i], terms.spring_offsets[i + 1]):
+        k = terms.spring_other[j]
+        p = terms.spring_params[j]
         xk = x[k]
         d = xk - xi
         length = wp.length(d)
@@ -160,26 +164,26 @@ def descend_node(
         c = p[2] / dt
         grad -= c * ((xk - x_start[k]) - vi)
         diagonal += c
-    for j in range(bend_offsets[i], bend_offsets[i + 1]):
-        k = bend_nodes[j]
-        grad += bend_values[j] * x[k]
+    for j in range(terms.bend_offsets[i], terms.bend_offsets[i + 1]):
+        k = terms.bend_nodes[j]
+        grad += terms.bend_values[j] * x[k]
         if k == i:
-            diagonal += bend_values[j]
-    for j in range(tri_offsets[i], tri_offsets[i + 1]):
-        slot = tri_slots[j]
+            diagonal += terms.bend_values[j]
+    for j in range(terms.tri_offsets[i], terms.tri_offsets[i + 1]):
+        slot = terms.tri_slots[j]
         t = slot // 3
-        area = membrane_area[t]
+        area = terms.membrane_area[t]
         if area > 0.0:
-            g = membrane_gradient(x, tris, inv_rest[t], membrane_c[t], t, slot - 3 * t)
+            g = membrane_gradient(x, terms.tris, terms.inv_rest[t], terms.membrane_c[t], t, slot - 3 * t)
             grad += area * g.force
             hess += area * g.hessian
-    for j in range(slider_offsets[i], slider_offsets[i + 1]):
-        slot = slider_slots[j]
+    for j in range(terms.slider_offsets[i], terms.slider_offsets[i + 1]):
+        slot = terms.slider_slots[j]
         h = slot // 4
-        weight = hinge_weights[h][slot - 4 * h]
-        friction = hinge_friction[h]
-        curvature = stencil_curvature(x, hinge_nodes[h], hinge_weights[h])
-        grad += weight * slider_moment(curvature, slip_world[h], friction, hinge_slip_limit[h])
+        weight = terms.hinge_weights[h][slot - 4 * h]
+        friction = terms.hinge_friction[h]
+        curvature = stencil_curvature(x, terms.hinge_nodes[h], terms.hinge_weights[h])
+        grad += weight * slider_moment(curvature, terms.slip_world[h], friction, terms.hinge_slip_limit[h])
         diagonal += friction * weight * weight
     hess += diagonal * wp.identity(n=3, dtype=float)
     det = wp.determinant(hess)
@@ -188,80 +192,17 @@ def descend_node(
 
 
 @wp.kernel
-def block_descent(
-    first: int,
-    colored: wp.array(dtype=int),
-    x_start: wp.array(dtype=wp.vec3),
-    y: wp.array(dtype=wp.vec3),
-    mass: wp.array(dtype=float),
-    inv_mass: wp.array(dtype=float),
-    spring_offsets: wp.array(dtype=int),
-    spring_other: wp.array(dtype=int),
-    spring_params: wp.array(dtype=wp.vec3),
-    bend_offsets: wp.array(dtype=int),
-    bend_nodes: wp.array(dtype=int),
-    bend_values: wp.array(dtype=float),
-    tri_offsets: wp.array(dtype=int),
-    tri_slots: wp.array(dtype=int),
-    tris: wp.array(dtype=int, ndim=2),
-    inv_rest: wp.array(dtype=wp.mat22),
-    membrane_area: wp.array(dtype=float),
-    membrane_c: wp.array(dtype=wp.mat33),
-    slider_offsets: wp.array(dtype=int),
-    slider_slots: wp.array(dtype=int),
-    hinge_nodes: wp.array(dtype=wp.vec4i),
-    hinge_weights: wp.array(dtype=wp.vec4),
-    hinge_friction: wp.array(dtype=float),
-    hinge_slip_limit: wp.array(dtype=float),
-    slip_world: wp.array(dtype=wp.vec3),
-    dt: float,
-    x: wp.array(dtype=wp.vec3),
-):
+def block_descent(first: int, colored: wp.array(dtype=int), terms: DescentTerms, x_start: wp.array(dtype=wp.vec3),
+                  dt: float, x: wp.array(dtype=wp.vec3)):
     """:func:`descend_node` for the nodes ``colored[first + tid]`` (one colour)."""
-    descend_node(colored[first + wp.tid()], x_start, y, mass, inv_mass, spring_offsets, spring_other,
-                 spring_params, bend_offsets, bend_nodes, bend_values, tri_offsets, tri_slots, tris, inv_rest,
-                 membrane_area, membrane_c, slider_offsets, slider_slots, hinge_nodes, hinge_weights, hinge_friction,
-                 hinge_slip_limit, slip_world, dt, x)
+    descend_node(colored[first + wp.tid()], terms, x_start, dt, x)
 
 
 @wp.kernel
-def sweep_workers(
-    worker: int,
-    workers: int,
-    sync: wp.array(dtype=int),
-    max_spins: int,
-    iterations: int,
-    color_offsets: wp.array(dtype=int),
-    omegas: wp.array(dtype=float),
-    colored: wp.array(dtype=int),
-    x_start: wp.array(dtype=wp.vec3),
-    y: wp.array(dtype=wp.vec3),
-    mass: wp.array(dtype=float),
-    inv_mass: wp.array(dtype=float),
-    spring_offsets: wp.array(dtype=int),
-    spring_other: wp.array(dtype=int),
-    spring_params: wp.array(dtype=wp.vec3),
-    bend_offsets: wp.array(dtype=int),
-    bend_nodes: wp.array(dtype=int),
-    bend_values: wp.array(dtype=float),
-    tri_offsets: wp.array(dtype=int),
-    tri_slots: wp.array(dtype=int),
-    tris: wp.array(dtype=int, ndim=2),
-    inv_rest: wp.array(dtype=wp.mat22),
-    membrane_area: wp.array(dtype=float),
-    membrane_c: wp.array(dtype=wp.mat33),
-    slider_offsets: wp.array(dtype=int),
-    slider_slots: wp.array(dtype=int),
-    hinge_nodes: wp.array(dtype=wp.vec4i),
-    hinge_weights: wp.array(dtype=wp.vec4),
-    hinge_friction: wp.array(dtype=float),
-    hinge_slip_limit: wp.array(dtype=float),
-    slip_world: wp.array(dtype=wp.vec3),
-    dt: float,
-    x: wp.array(dtype=wp.vec3),
-    x_previous: wp.array(dtype=wp.vec3),
-    x_before: wp.array(dtype=wp.vec3),
-):
+def sweep_workers(worker: int, workers: int, sync: wp.array(dtype=int), max_spins: int, iterations: int,
+                  color_offsets: wp.array(dtype=int), omegas: wp.array(dtype=float), colored: wp.array(dtype=int),
+                  terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float, x: wp.array(dtype=wp.vec3),
+                  x_previous: wp.array(dtype=wp.vec3), x_before: wp.array(dtype=wp.vec3)):
     """All of a step's sweeps as one worker of :func:`~party.launch.launch_workers`: the worker
     takes its share of each colour's nodes (:func:`descend_node`) and of the Chebyshev blend
     (``omegas[k]`` of sweep k; none where ``omegas`` is empty), the workers meeting between
@@ -272,10 +213,7 @@ def sweep_workers(
             first = color_offsets[c]
             count = color_offsets[c + 1] - first
             for j in range(first + count * worker // workers, first + count * (worker + 1) // workers):
-                descend_node(colored[j], x_start, y, mass, inv_mass, spring_offsets, spring_other, spring_params,
-                             bend_offsets, bend_nodes, bend_values, tri_offsets, tri_slots, tris, inv_rest,
-                             membrane_area, membrane_c, slider_offsets, slider_slots, hinge_nodes, hinge_weights,
-                             hinge_friction, hinge_slip_limit, slip_world, dt, x)
+                descend_node(colored[j], terms, x_start, dt, x)
             worker_barrier(sync, workers, max_spins)
         if omegas.shape[0] > 0:
             n = x.shape[0]

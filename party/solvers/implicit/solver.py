@@ -17,8 +17,8 @@ from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
-from .kernels import (block_descent, chebyshev_blend, inertial_target, record_correction, step_velocity,
-                      sweep_workers)
+from .kernels import (DescentTerms, block_descent, chebyshev_blend, inertial_target, record_correction,
+                      step_velocity, sweep_workers)
 
 
 SLIDER_STEP_RATIO = 100.0
@@ -63,8 +63,8 @@ class SolverImplicit:
     """
 
     def __init__(self, model: Model, *, iterations: int = 10, chebyshev: float = 0.9,
-                 collision: CollisionSettings | None = CollisionSettings(), air: Air | None = None, plastic_passes: int = 32,
-                 kinetic_damping: tuple[float, float] | None = None) -> None:
+                 collision: CollisionSettings | None = CollisionSettings(), air: Air | None = None,
+                 plastic_passes: int = 32, kinetic_damping: tuple[float, float] | None = None) -> None:
         if iterations < 1:
             raise InvalidInput(f"implicit solver needs at least 1 iteration, got {iterations}")
         self.model = model
@@ -112,6 +112,7 @@ class SolverImplicit:
         self._omegas = wp.array(self._omega_values, dtype=float, device=dev)
         self._sync = wp.zeros(3, dtype=int, device=dev)
         self.workers = worker_count(len(colored), dev)
+        self._terms = self._descent_terms()
         self._graphs: dict = {}
         self._capture = True
 
@@ -179,37 +180,51 @@ class SolverImplicit:
                    inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
                    device=dev)
         wp.copy(self._x_before, self._x)
-        descent = [state_in.node_q, self._y, m.node_mass, m.node_inv_mass, self._spring_offsets, self._spring_other,
-                   self._spring_params, self._bend_offsets, self._bend_nodes, self._bend_values, self._tri_offsets,
-                   self._tri_slots, m.triangle_nodes, m.triangle_inv_rest, m.triangle_membrane_area,
-                   m.triangle_membrane_c, self._slider_offsets, self._slider_slots, m.hinge_nodes, m.hinge_weights,
-                   m.hinge_friction, m.hinge_slip_limit, self._slip_world, dt, self._x]
         if self.workers > 1:
             launch_workers(sweep_workers, self.workers, self._sync,
-                           [self.iterations, self._color_offsets, self._omegas, self._colored, *descent,
-                            self._x_previous, self._x_before], dev)
+                           [self.iterations, self._color_offsets, self._omegas, self._colored, self._terms,
+                            state_in.node_q, dt, self._x, self._x_previous, self._x_before], dev)
         else:
-            self._sweep_by_colour(descent)
+            self._sweep_by_colour(state_in.node_q, dt)
         launch(record_correction, dim=m.node_count, inputs=[self._x, self._y, self._correction], device=dev)
         launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._x, dt],
                outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
-    def _sweep_by_colour(self, descent: list) -> None:
-        """The sweeps as one launch per colour and one per Chebyshev blend (``descent``: the
-        block descent's arguments after the colour's nodes)."""
+    def _sweep_by_colour(self, x_start: wp.array, dt: float) -> None:
+        """The sweeps as one launch per colour and one per Chebyshev blend."""
         offsets = self.color_offsets
         omegas = self._omega_values
+        dev = self.model.device
         for iteration in range(self.iterations):
             for c in range(len(offsets) - 1):
-                launch_items(block_descent, offsets[c], offsets[c + 1] - offsets[c], [self._colored, *descent],
-                             self.model.device)
+                launch_items(block_descent, offsets[c], offsets[c + 1] - offsets[c],
+                             [self._colored, self._terms, x_start, dt, self._x], dev)
             if len(omegas) == 0:
                 continue
             if iteration == 0:
                 wp.copy(self._x_previous, self._x)
                 continue
             launch(chebyshev_blend, dim=self.model.node_count,
-                   inputs=[self._x, self._x_previous, self._x_before, float(omegas[iteration])], device=self.model.device)
+                   inputs=[self._x, self._x_previous, self._x_before, float(omegas[iteration])], device=dev)
+
+    def _descent_terms(self) -> DescentTerms:
+        """The solver's and model's arrays that the block descent reads (set once; the struct
+        is packed anew only where a field is replaced)."""
+        m = self.model
+        terms = DescentTerms()
+        terms.y, terms.mass, terms.inv_mass = self._y, m.node_mass, m.node_inv_mass
+        terms.spring_offsets, terms.spring_other, terms.spring_params = (self._spring_offsets, self._spring_other,
+                                                                         self._spring_params)
+        terms.bend_offsets, terms.bend_nodes = self._bend_offsets, self._bend_nodes
+        terms.bend_values = self._bend_values
+        terms.tri_offsets, terms.tri_slots, terms.tris = self._tri_offsets, self._tri_slots, m.triangle_nodes
+        terms.inv_rest, terms.membrane_area, terms.membrane_c = (m.triangle_inv_rest, m.triangle_membrane_area,
+                                                                 m.triangle_membrane_c)
+        terms.slider_offsets, terms.slider_slots = self._slider_offsets, self._slider_slots
+        terms.hinge_nodes, terms.hinge_weights = m.hinge_nodes, m.hinge_weights
+        terms.hinge_friction, terms.hinge_slip_limit = m.hinge_friction, m.hinge_slip_limit
+        terms.slip_world = self._slip_world
+        return terms
 
 
 def chebyshev_weights(iterations: int, rho: float) -> np.ndarray:
