@@ -118,10 +118,9 @@ def _one_stays_away(worker: int, workers: int, sync: wp.array(dtype=int), max_sp
         launch.worker_barrier(sync, workers, max_spins)
 
 
-def test_workers_meeting_at_barriers_give_what_one_worker_gives(monkeypatch):
+def test_workers_meeting_at_barriers_give_what_one_worker_gives():
     """Three workers each take a third of every round; a round reads values the others wrote in
     the last (a missing barrier would let a worker read stale ones)."""
-    monkeypatch.setenv("PARTY_THREADS", "3")
     results = []
     for workers in (1, 3):
         even = wp.array(np.arange(3001, dtype=np.float32), dtype=float, device="cpu")
