@@ -10,7 +10,7 @@ import warp as wp
 
 from ...collision import CollisionSettings
 from ...errors import InvalidInput
-from ...launch import launch, launch_items, launch_workers, worker_count
+from ...launch import launch, launch_workers, worker_count
 from ...model import Control, Model, State
 from ...model.csr import csr_order
 from ..aero import Air, AirForces
@@ -191,14 +191,16 @@ class SolverImplicit:
                outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
     def _sweep_by_colour(self, x_start: wp.array, dt: float) -> None:
-        """The sweeps as one launch per colour and one per Chebyshev blend."""
+        """The sweeps as one launch per colour and one per Chebyshev blend (on one CPU thread,
+        recorded into the solve's graph, or on CUDA; several CPU threads take
+        :func:`~party.solvers.implicit.kernels.sweep_workers` instead)."""
         offsets = self.color_offsets
         omegas = self._omega_values
         dev = self.model.device
         for iteration in range(self.iterations):
             for c in range(len(offsets) - 1):
-                launch_items(block_descent, offsets[c], offsets[c + 1] - offsets[c],
-                             [self._colored, self._terms, x_start, dt, self._x], dev)
+                launch(block_descent, offsets[c + 1] - offsets[c],
+                       [offsets[c], self._colored, self._terms, x_start, dt, self._x], device=dev)
             if len(omegas) == 0:
                 continue
             if iteration == 0:
