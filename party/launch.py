@@ -40,6 +40,8 @@ from typing import Any, Sequence
 
 import warp as wp
 
+from .errors import WorkersLost
+
 WORKER_SPINS = (1 << 31) - 1
 """Spins at a :func:`worker_barrier` before a worker gives up on the others (minutes): a worker
 that never arrives is a bug, which this turns into an error rather than a hang."""
@@ -240,8 +242,6 @@ def launch_workers(kernel: Any, workers: int, sync: wp.array, inputs: Sequence[A
         other.result()
     if int(sync.numpy()[2]):
         sync.zero_()
-        from .errors import WorkersLost
-
         raise WorkersLost(f"{kernel.key}: a worker thread waited {WORKER_SPINS} spins for the others; "
                           "rerun with PARTY_THREADS=1")
 

@@ -37,9 +37,8 @@ stiffness crumples: a Cusick specimen of denim at 15 mm (ratio 5,600 at 1/300 s)
 9.5 % at 10 sweeps a step, 41 % at 15 and 40 % at 30 (the explicit solver: 36 %), and one of
 1,000 N/m at 100 g/m^2 and 7.5 mm (13,600) crumpled at 22 sweeps, not at 25. Garments in wool
 flannel at 15-30 mm stay within 1,400, so their sweeps are as given; denim's grow below about
-20 mm. (Substeps
-instead, three of 10 sweeps for denim at 7.5 mm, kept the specimen for 2 s and then let it
-crumple; 60 sweeps in one step held it.)"""
+20 mm. (Substeps instead, three of 10 sweeps for denim at 7.5 mm, kept the specimen for 2 s
+and then let it crumple; 60 sweeps in one step held it.)"""
 
 MAX_SWEEPS = 100
 """Most sweeps :data:`STIFFNESS_PER_SWEEP` gives a (sub)step; a stiffer model takes substeps."""
