@@ -259,6 +259,24 @@ def test_crossing_guard_testing_listed_triangles_finds_what_a_search_at_every_ch
         assert listed.end.guard.searches == 1
 
 
+def test_crossing_guard_testing_every_edge_without_lists_finds_what_its_lists_find(monkeypatch):
+    """Where the cloth moves too fast for lists to last, the guard tests every edge against
+    the triangles its box meets instead of listing: on the falling strips that reverts the
+    same nodes and ends bit for bit where checking through lists does."""
+    import party.collision.crossing_guard as guard
+
+    runs = {}
+    for fast in (False, True):
+        monkeypatch.setattr(guard.CrossingGuard, "_moving_fast", lambda self, x, fast=fast: fast)
+        runs[fast] = crossing_strips(guard=True)
+    (listed_counts, listed), (direct_counts, direct) = runs[False], runs[True]
+    assert direct.end.guard.searches == 0 and direct.end.guard.direct_checks > 20
+    assert listed.end.guard.direct_checks == 0 and listed.end.guard.searches > 0
+    assert direct.end.guard.reverts == listed.end.guard.reverts > 0
+    assert np.array_equal(direct_counts, listed_counts) and direct_counts.max() == 0
+    assert np.array_equal(direct.final_points, listed.final_points)
+
+
 def test_crossing_guard_keeps_its_lists_while_the_cloth_moves_as_a_whole():
     """Two layers 2 mm apart carried 10 cm sideways and down, 4 mm per check (beyond half the
     lists' reach): no pair comes closer, so the guard lists once and reverts nothing; the
