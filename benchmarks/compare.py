@@ -1,7 +1,7 @@
 """party against Blender and Newton, measured in one run.
 
     python benchmarks/compare.py [--grids 64 100] [--self-collision off on]
-                                 [--systems party-implicit party-explicit blender newton]
+                                 [--systems party-implicit party-implicit-150hz party-explicit blender newton]
                                  [--seconds 1] [--garments/--no-garments] [--out benchmarks/results]
 
 Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius
@@ -14,7 +14,9 @@ for all (smallest distance of a node from the sphere's centre, nodes inside the 
 height range, and how far the final shape lies from party implicit's: the mean and the largest
 distance from a node of either to the nearest node of the other, the symmetric Hausdorff
 distance over nodes). The outcome is equal where no node is inside the sphere and the shapes
-lie within :data:`SAME_SHAPE` of each other.
+lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's implicit solver
+at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where party's own is
+1/300 s); a last line gives Blender's time over it, step for step.
 
 Scenes (b) and (c), party only: the reference dress (``party/data/patterns``) on the default
 dress form and GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj`` (from
@@ -44,6 +46,9 @@ SHARED = HERE.parent.parent / "shared" / "data" / "garmentcode"
 GARMENTCODE_SECONDS = 1086.0
 """GarmentCode's own simulator on dress_sleeves_flare on this machine's kind (its README)."""
 SPHERE_RADIUS = 0.3
+SYSTEMS = ["party-implicit", "party-implicit-150hz", "party-explicit", "blender", "newton"]
+PARTY_DT = {"party-implicit": None, "party-implicit-150hz": 1.0 / 150.0, "party-explicit": None}
+"""party's time step [s] per system (None: the solver's own)."""
 SAME_SHAPE = 0.01
 """Largest distance between two systems' final shapes [m] for an equal outcome (issue 4: 1 cm)."""
 
@@ -52,8 +57,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--grids", type=int, nargs="+", default=[64, 100])
     parser.add_argument("--self-collision", nargs="+", choices=["off", "on"], default=["off", "on"])
-    parser.add_argument("--systems", nargs="+", default=["party-implicit", "party-explicit", "blender", "newton"],
-                        choices=["party-implicit", "party-explicit", "blender", "newton"])
+    parser.add_argument("--systems", nargs="+", default=SYSTEMS, choices=SYSTEMS)
     parser.add_argument("--seconds", type=float, default=1.0,
                         help="simulated seconds of the sphere drop (at 1 s the cloth still slides)")
     parser.add_argument("--garments", action=argparse.BooleanOptionalAction, default=True)
@@ -75,7 +79,7 @@ def main() -> None:
                 print(f"    {describe(rows[-1])}", flush=True)
     if args.garments:
         for label, pattern, body in garment_scenes():
-            for system in [s for s in args.systems if s.startswith("party")]:
+            for system in [s for s in args.systems if s in ("party-implicit", "party-explicit")]:
                 print(f"{label}: {system} ...", flush=True)
                 rows.append({"scene": label, "system": system, **run_drape(pattern, body, system.split("-")[1])})
                 print(f"    {describe(rows[-1])}", flush=True)
@@ -84,7 +88,7 @@ def main() -> None:
 
 def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, timeout: float) -> dict:
     if system.startswith("party"):
-        return party_sphere(system.split("-")[1], grid, self_collision, seconds)
+        return party_sphere(system.split("-")[1], grid, self_collision, seconds, PARTY_DT[system])
     python = ensure_venv(system)
     script, _ = PEERS[system]
     with tempfile.TemporaryDirectory() as tmp:
@@ -105,13 +109,13 @@ def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, tim
                 float(data["wall_seconds"] / data["simulated_seconds"]), **outcome(data["points"])}
 
 
-def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float) -> dict:
+def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, dt: float | None) -> dict:
     import warp as wp
 
     from party.scenes.sphere_drop import build
 
     started = time.perf_counter()
-    scene = build(grid=grid, self_collision=self_collision, solver=solver, duration=seconds)
+    scene = build(grid=grid, self_collision=self_collision, solver=solver, duration=seconds, dt=dt)
     state, scratch = scene.model.state(), scene.model.state()
     control = scene.model.control()
     steps = int(round(scene.duration / scene.dt))
@@ -231,6 +235,12 @@ def report(rows: list[dict], out: Path) -> None:
         else:
             table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "")
     Console(width=200).print(table)
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        times = {r["system"]: r["wall_per_simulated_second"] for r in rows
+                 if r["scene"] == scene and "wall_per_simulated_second" in r}
+        if "blender" in times and "party-implicit-150hz" in times:
+            print(f"{scene}: at Blender's step (1/150 s) party's implicit solver is "
+                  f"{times['blender'] / times['party-implicit-150hz']:.2f}x faster than Blender")
     plain = [{k: v for k, v in r.items() if k != "points"} for r in rows]
     with open(out / "compare.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=sorted({k for r in plain for k in r}))
