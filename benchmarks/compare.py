@@ -4,19 +4,20 @@
                                  [--systems party-implicit party-implicit-150hz party-explicit blender newton]
                                  [--seconds 1] [--garments/--no-garments] [--out benchmarks/results]
 
-Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius
-0.3 m for 1 s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for the peers). Each peer runs
-in its own virtual environment under ``benchmarks/.venvs/``, made here if missing (bpy 5.0.1
-needs Python 3.11; newton 1.8.0). Printed per scene and system: wall seconds per simulated
-second with start-up (imports, set-up, the first frame's kernel compilation) excluded and
-reported apart, the ratio to party's implicit solver, and the outcome checked the same way
-for all (smallest distance of a node from the sphere's centre, nodes inside the sphere, final
-height range, and how far the final shape lies from party implicit's: the mean and the largest
-distance from a node of either to the nearest node of the other, the symmetric Hausdorff
-distance over nodes). The outcome is equal where no node is inside the sphere and the shapes
-lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's implicit solver
-at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where party's own is
-1/300 s); a last line gives Blender's time over it, step for step.
+Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius 0.3 m
+for 1 s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for the peers). Each peer
+runs in its own virtual environment under ``benchmarks/.venvs/``, made here if missing (bpy 5.0.1
+needs Python 3.11; newton 1.8.0). Printed per scene and system: wall seconds per simulated second
+with start-up (imports, set-up, the first frame's kernel compilation) excluded and reported apart,
+the ratio to party's implicit solver, and the outcome checked the same way for all (smallest
+distance of a node from the sphere's centre, nodes inside the sphere, cloth crossings: mesh edges
+through a triangle of the final mesh, a peer's quads split in two; final height range, and how far
+the final shape lies from party implicit's: the mean and the largest distance from a node of either
+to the nearest node of the other, the symmetric Hausdorff distance over nodes). The outcome is
+equal where no node is inside the sphere, no edge crosses the cloth (with self-collision on) and
+the shapes lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's
+implicit solver at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where
+party's own is 1/300 s); a last line gives Blender's time over it, step for step.
 
 Scenes (b) and (c), party only: the reference dress (``party/data/patterns``) on the default
 dress form and GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj`` (from
@@ -75,7 +76,7 @@ def main() -> None:
             for system in args.systems:
                 print(f"{scene}: {system} ...", flush=True)
                 result = run_sphere(system, grid, self_collision == "on", args.seconds, args.peer_timeout)
-                rows.append({"scene": scene, "system": system, **result})
+                rows.append({"scene": scene, "system": system, "self_collision": self_collision == "on", **result})
                 print(f"    {describe(rows[-1])}", flush=True)
     if args.garments:
         for label, pattern, body in garment_scenes():
@@ -106,7 +107,7 @@ def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, tim
         data = np.load(out)
         total = time.perf_counter() - started
         return {"startup_seconds": float(total - data["wall_seconds"]), "wall_per_simulated_second":
-                float(data["wall_seconds"] / data["simulated_seconds"]), **outcome(data["points"])}
+                float(data["wall_seconds"] / data["simulated_seconds"]), **outcome(data["points"], data["triangles"])}
 
 
 def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, dt: float | None) -> dict:
@@ -132,14 +133,18 @@ def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, d
     wp.synchronize()
     wall = (time.perf_counter() - t) * steps / (steps - first)
     return {"startup_seconds": startup, "wall_per_simulated_second": wall / scene.duration,
-            **outcome(state.positions())}
+            **outcome(state.positions(), scene.model.triangles)}
 
 
-def outcome(points: np.ndarray) -> dict:
+def outcome(points: np.ndarray, triangles: np.ndarray) -> dict:
+    from party.output.metrics import cloth_crossings
+
     r = np.linalg.norm(points, axis=1)
+    nan = bool(np.isnan(points).any())
     return {"nodes": int(len(points)), "min_distance_from_centre_m": float(r.min()),
             "nodes_inside": int((r < SPHERE_RADIUS).sum()), "z_min_m": float(points[:, 2].min()),
-            "z_max_m": float(points[:, 2].max()), "nan": bool(np.isnan(points).any()), "points": points}
+            "z_max_m": float(points[:, 2].max()), "nan": nan, "points": points,
+            "cloth_crossings": -1 if nan else cloth_crossings(points, np.asarray(triangles))}
 
 
 def shape_distance(points: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
@@ -205,6 +210,7 @@ def describe(row: dict) -> str:
                 f"{row['ratio_to_garmentcode']:.1f}x GarmentCode's 1,086 s")
     return (f"{row['wall_per_simulated_second']:.2f} s per simulated s (start-up {row['startup_seconds']:.1f} s), "
             f"min r {row['min_distance_from_centre_m']:.4f} m, inside {row['nodes_inside']}, "
+            f"crossings {row['cloth_crossings']}, "
             f"z {row['z_min_m']:.3f}..{row['z_max_m']:.3f} m")
 
 
@@ -214,8 +220,8 @@ def report(rows: list[dict], out: Path) -> None:
 
     implicit = {r["scene"]: r for r in rows if r["system"] == "party-implicit" and "points" in r}
     table = Table(title="party vs Blender vs Newton (2-core CPU unless stated)")
-    for column in ("scene", "system", "s per sim s", "x party-implicit", "start-up s", "min r m", "inside", "z range m",
-                   "shape vs implicit mm (mean/max)", "equal outcome"):
+    for column in ("scene", "system", "s per sim s", "x party-implicit", "start-up s", "min r m", "inside", "crossings",
+                   "z range m", "shape vs implicit mm (mean/max)", "equal outcome"):
         table.add_column(column)
     for r in rows:
         if "wall_per_simulated_second" in r:
@@ -227,13 +233,14 @@ def report(rows: list[dict], out: Path) -> None:
             if reference is not None and not (r["nan"] or reference["nan"]):
                 mean, largest = shape_distance(r["points"], reference["points"])
                 r["shape_mean_m"], r["shape_max_m"] = mean, largest
-                r["equal_outcome"] = r["nodes_inside"] == 0 and largest <= SAME_SHAPE
+                crossed = r["self_collision"] and r["cloth_crossings"] != 0
+                r["equal_outcome"] = r["nodes_inside"] == 0 and not crossed and largest <= SAME_SHAPE
                 shape, equal = f"{1000 * mean:.1f} / {1000 * largest:.1f}", "yes" if r["equal_outcome"] else "no"
             table.add_row(r["scene"], r["system"], f"{r['wall_per_simulated_second']:.2f}", f"{ratio:.2f}",
                           f"{r['startup_seconds']:.1f}", f"{r['min_distance_from_centre_m']:.4f}", str(r["nodes_inside"]),
-                          f"{r['z_min_m']:.3f}..{r['z_max_m']:.3f}", shape, equal)
+                          str(r["cloth_crossings"]), f"{r['z_min_m']:.3f}..{r['z_max_m']:.3f}", shape, equal)
         else:
-            table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "")
+            table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "", "")
     Console(width=200).print(table)
     for scene in dict.fromkeys(r["scene"] for r in rows):
         times = {r["system"]: r["wall_per_simulated_second"] for r in rows
