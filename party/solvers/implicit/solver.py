@@ -21,12 +21,13 @@ from .kernels import (DescentTerms, block_descent, chebyshev_blend, inertial_tar
                       step_velocity, sweep_workers)
 
 
-SLIDER_STEP_RATIO = 100.0
-"""Largest bending stiffness over inertia, L_ii dt^2 / m_i, at the nodes of a bending-hysteresis
-slider in one (sub)step. Beyond it the sweeps leave a node's fall unresisted in the first steps
-and the slider keeps the kink: a cotton cantilever of 4 segments whose root moment is below HB
-bends 1/6 as far as without hysteresis, as it must, at ratios up to 193, and 5 times as far at
-343 (``--solver explicit`` agrees at 1/6)."""
+SLIDER_STEP_RATIO = 600.0
+"""Largest stuck bending stiffness over inertia, (1 + f) L_ii dt^2 / m_i with f the hysteresis
+element's stiffness (:data:`party.model.builder.HYSTERESIS_STIFFNESS`), at the nodes of a
+bending-hysteresis slider in one (sub)step. Beyond it the sweeps leave a node's fall unresisted
+in the first steps and the slider keeps the kink: a cotton cantilever of 4 segments whose root
+moment is below HB bends 1/(1 + f) as far as without hysteresis, as it must, at stuck ratios up
+to 1,160, and 5 times as far at 2,060 (f = 5; ``--solver explicit`` agrees)."""
 
 STIFFNESS_PER_SWEEP = 400.0
 """Stiffness over inertia, K_ii dt^2 / m_i (the largest over the nodes: springs, membrane and
@@ -107,7 +108,7 @@ class SolverImplicit:
         self._spring_other = wp.array(other, dtype=int, device=dev)
         self._spring_params = wp.array(params.astype(np.float32), dtype=wp.vec3, device=dev)
         bend = model.bending_matrix(friction=False)
-        self._slider_stiffness = slider_stiffness(model, bend.diagonal())
+        self._slider_stiffness = slider_stiffness(model, model.bending_matrix(friction=True).diagonal())
         self._node_stiffness = node_stiffness(model, bend.diagonal())
         self._scratch: State | None = None
         self._bend_offsets = wp.array(bend.indptr.astype(np.int32), dtype=int, device=dev)
@@ -152,8 +153,8 @@ class SolverImplicit:
 
     def substeps(self, dt: float) -> int:
         """Substeps a step of ``dt`` [s] takes: as many as keep each substep's stiffness within
-        :data:`MAX_SWEEPS` sweeps (:meth:`sweeps`) and, with bending hysteresis, its bending
-        stiffness within :data:`SLIDER_STEP_RATIO` times its inertia."""
+        :data:`MAX_SWEEPS` sweeps (:meth:`sweeps`) and, with bending hysteresis, its stuck
+        bending stiffness within :data:`SLIDER_STEP_RATIO` times its inertia."""
         limits = ((self._slider_stiffness, SLIDER_STEP_RATIO),
                   (self._node_stiffness, STIFFNESS_PER_SWEEP * MAX_SWEEPS))
         return max(1, *(math.ceil(math.sqrt(rate * dt * dt / ratio) - 1e-9) for rate, ratio in limits))
@@ -280,13 +281,14 @@ def node_springs(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return offsets.astype(np.int32), other[order].astype(np.int32), values[order]
 
 
-def slider_stiffness(model: Model, bending_diagonal: np.ndarray) -> float:
-    """The largest L_ii / m_i [1/s^2] over the nodes of stencils with a bending-hysteresis
-    slider (L the bending matrix without the sliders; 0 without hysteresis)."""
+def slider_stiffness(model: Model, stuck_diagonal: np.ndarray) -> float:
+    """The largest stuck bending stiffness L_ii / m_i [1/s^2] over the nodes of stencils with a
+    bending-hysteresis slider (L the bending matrix with the sliders stuck,
+    ``Model.bending_matrix(friction=True)``; 0 without hysteresis)."""
     h = model.host
     nodes = np.unique(h["hinge_nodes"][h["hinge_friction"] > 0.0])
     nodes = nodes[~h["kinematic"][nodes]]
-    return float(np.max(bending_diagonal[nodes] / h["mass"][nodes], initial=0.0))
+    return float(np.max(stuck_diagonal[nodes] / h["mass"][nodes], initial=0.0))
 
 
 def node_stiffness(model: Model, bending_diagonal: np.ndarray) -> float:
