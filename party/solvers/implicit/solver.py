@@ -22,12 +22,13 @@ from .kernels import (DescentTerms, block_descent, chebyshev_blend, inertial_tar
 
 
 SLIDER_STEP_RATIO = 600.0
-"""Largest stuck bending stiffness over inertia, (1 + f) L_ii dt^2 / m_i with f the hysteresis
-element's stiffness (:data:`party.model.builder.HYSTERESIS_STIFFNESS`), at the nodes of a
-bending-hysteresis slider in one (sub)step. Beyond it the sweeps leave a node's fall unresisted
-in the first steps and the slider keeps the kink: a cotton cantilever of 4 segments whose root
-moment is below HB bends 1/(1 + f) as far as without hysteresis, as it must, at stuck ratios up
-to 1,160, and 5 times as far at 2,060 (f = 5; ``--solver explicit`` agrees)."""
+"""Largest stuck bending stiffness over inertia, L_ii dt^2 / m_i with L the bending matrix with
+its sliders stuck (:func:`slider_stiffness`), at the nodes of a bending-hysteresis slider in one
+(sub)step. Beyond it the sweeps leave a node's fall unresisted in the first steps and the slider
+keeps the kink: with the hysteresis element 5 times as stiff as the bending, a cotton cantilever
+of 4 segments whose root moment is below HB bent 1/6 as far as without hysteresis, as it must,
+at bending-only ratios up to 193, and 5 times as far at 343 (``--solver explicit`` agrees); the
+stuck ratio is about 6 times those."""
 
 STIFFNESS_PER_SWEEP = 400.0
 """Stiffness over inertia, K_ii dt^2 / m_i (the largest over the nodes: springs, membrane and
