@@ -345,13 +345,7 @@ class CrossingGuard:
         self.found.zero_()
         hot = 0
         if self._listed:
-            self._flag.zero_()
-            self._displacement.zero_()
-            launch(_sum_displacement, dim=m.node_count, inputs=[x, self.listed_at, self._displacement], device=m.device)
-            launch(_mark_hot, dim=m.node_count,
-                   inputs=[x, self.listed_at, self._displacement, 1.0 / m.node_count, 0.5 * self.reach, self.hot,
-                           self._flag], device=m.device)
-            hot = int(self._flag.numpy()[0])
+            hot = self._mark_moved(x, self.listed_at, 0.5 * self.reach)
             self._listed = hot <= self._most_hot
         if not self._listed:
             if self._moving_fast(x):
@@ -360,8 +354,7 @@ class CrossingGuard:
                 self._list_and_check(x)
             return bool(self.found.numpy()[0])
         if hot:
-            wp.copy(self.points, x)
-            self.mesh.refit()
+            self._refit_mesh(x)
             launch(_edge_boxes, dim=self.edge_count, inputs=[x, self.edges, self._edge_lower, self._edge_upper],
                    device=m.device)
             if self._edge_tree is None:
@@ -381,22 +374,31 @@ class CrossingGuard:
         """Whether more nodes than :data:`HOT_SHARE` allows moved farther than
         :data:`FAST_SHARE` of the reach, beyond the mean displacement, since the last check:
         a list made now would be made again within a few checks."""
+        return self._mark_moved(x, self.anchor, FAST_SHARE * self.reach) > self._most_hot
+
+    def _mark_moved(self, x: wp.array, since: wp.array, limit: float) -> int:
+        """Mark in ``hot`` the nodes that moved farther than ``limit`` [m] from ``since``, beyond
+        the mean displacement of all nodes, and count them (syncs with the device)."""
         m = self.model
         self._flag.zero_()
         self._displacement.zero_()
-        launch(_sum_displacement, dim=m.node_count, inputs=[x, self.anchor, self._displacement], device=m.device)
+        launch(_sum_displacement, dim=m.node_count, inputs=[x, since, self._displacement], device=m.device)
         launch(_mark_hot, dim=m.node_count,
-               inputs=[x, self.anchor, self._displacement, 1.0 / m.node_count, FAST_SHARE * self.reach, self.hot,
-                       self._flag], device=m.device)
-        return int(self._flag.numpy()[0]) > self._most_hot
+               inputs=[x, since, self._displacement, 1.0 / m.node_count, limit, self.hot, self._flag],
+               device=m.device)
+        return int(self._flag.numpy()[0])
+
+    def _refit_mesh(self, x: wp.array) -> None:
+        """Move the triangles' mesh (and its BVH) to ``x``."""
+        wp.copy(self.points, x)
+        self.mesh.refit()
 
     def _check_every_edge(self, x: wp.array) -> None:
         """Mark the edges through a triangle at ``x``, each tested against every triangle its
         box meets (no lists are made)."""
         m = self.model
         self.direct_checks += 1
-        wp.copy(self.points, x)
-        self.mesh.refit()
+        self._refit_mesh(x)
         launch_items(_check_listed_edges, 0, self.edge_count,
                      [self.mesh.id, x, m.triangle_nodes, self.edges, self.near, self.near_count, self._everywhere,
                       self.crossed_before, self.crossed_now, self.revert, self.found], m.device)
@@ -406,8 +408,7 @@ class CrossingGuard:
         a search finds more than they hold) and mark the edges through one."""
         m = self.model
         self.searches += 1
-        wp.copy(self.points, x)
-        self.mesh.refit()
+        self._refit_mesh(x)
         while True:
             self._flag.zero_()
             launch_items(_list_and_check_edges, 0, self.edge_count,

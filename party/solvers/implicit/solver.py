@@ -109,7 +109,7 @@ class SolverImplicit:
         self._spring_other = wp.array(other, dtype=int, device=dev)
         self._spring_params = wp.array(params.astype(np.float32), dtype=wp.vec3, device=dev)
         bend = model.bending_matrix(friction=False)
-        self._slider_stiffness = slider_stiffness(model, model.bending_matrix(friction=True).diagonal())
+        self._slider_stiffness = slider_stiffness(model)
         self._node_stiffness = node_stiffness(model, bend.diagonal())
         self._scratch: State | None = None
         self._bend_offsets = wp.array(bend.indptr.astype(np.int32), dtype=int, device=dev)
@@ -282,14 +282,18 @@ def node_springs(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return offsets.astype(np.int32), other[order].astype(np.int32), values[order]
 
 
-def slider_stiffness(model: Model, stuck_diagonal: np.ndarray) -> float:
+def slider_stiffness(model: Model) -> float:
     """The largest stuck bending stiffness L_ii / m_i [1/s^2] over the nodes of stencils with a
     bending-hysteresis slider (L the bending matrix with the sliders stuck,
     ``Model.bending_matrix(friction=True)``; 0 without hysteresis)."""
     h = model.host
-    nodes = np.unique(h["hinge_nodes"][h["hinge_friction"] > 0.0])
+    sliding = h["hinge_friction"] > 0.0
+    if not sliding.any():
+        return 0.0
+    nodes = np.unique(h["hinge_nodes"][sliding])
     nodes = nodes[~h["kinematic"][nodes]]
-    return float(np.max(stuck_diagonal[nodes] / h["mass"][nodes], initial=0.0))
+    stuck = model.bending_matrix(friction=True).diagonal()
+    return float(np.max(stuck[nodes] / h["mass"][nodes], initial=0.0))
 
 
 def node_stiffness(model: Model, bending_diagonal: np.ndarray) -> float:
