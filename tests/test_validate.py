@@ -191,22 +191,23 @@ MEASURED = pytest.mark.skipif(not cusick.MEASURED.exists(),
                               reason=f"measured fabric data not found at {cusick.MEASURED}")
 
 
-def measured_drape(name: str, solver: str):
-    """Case 7's first specimen of measured fabric ``name`` draped by ``solver``, with its
-    measured DC [%] and folds."""
+def measured_specimens(name: str, solver: str):
+    """Case 7's specimens of measured fabric ``name`` draped by ``solver`` (three, as the case
+    drapes them), with its measured DC [%] and folds."""
     fabric, dc, nodes = next(row for row in cusick.measured_fabrics() if row[0].name == name)
-    drape = cusick.drape_test(fabric, solver, cusick.MEASURED_SPACING, drapemeter=cusick.MATSUDAIRA)
-    return drape, dc, nodes
+    drapes = cusick.drape_specimens(fabric, solver, cusick.MEASURED_SPACING, cusick.MATSUDAIRA,
+                                    cusick.SPECIMENS["default"])
+    return drapes, dc, nodes
 
 
 @pytest.fixture(scope="module")
 def measured_drapes():
-    """Case 7's first specimens, each draped once per module: ``get(name, solver)``."""
+    """Case 7's specimens, each draped once per module: ``get(name, solver)``."""
     drapes = {}
 
     def get(name: str, solver: str):
         if (name, solver) not in drapes:
-            drapes[name, solver] = measured_drape(name, solver)
+            drapes[name, solver] = measured_specimens(name, solver)
         return drapes[name, solver]
 
     return get
@@ -219,19 +220,22 @@ def test_both_solvers_drape_a_measured_cusick_specimen_alike(measured_drapes):
     explicit solver's. Its body-vertex response once pushed the cloth on the pedestal's rim
     outward along the rim's vertex normals, and the specimen drooped to 32.8 % against 42.3 %;
     at its own step of 1/300 s it drapes to 39.9 % (three specimens; see cusick.FALL_STEP)."""
-    explicit, _, _ = measured_drapes("measured_B", "explicit")
-    implicit, _, _ = measured_drapes("measured_B", "implicit")
+    explicit = measured_drapes("measured_B", "explicit")[0][0]
+    implicit = measured_drapes("measured_B", "implicit")[0][0]
     assert abs(implicit.coefficient - explicit.coefficient) < 0.03
 
 
 @MEASURED
 @pytest.mark.parametrize("solver", SOLVERS)
 def test_measured_fabrics_drape_within_case_7s_tolerance(measured_drapes, solver):
-    """Case 7 on its first specimens: fabrics B, C and F (measured DC 49.8, 50.7 and 28.3 %,
-    5, 5 and 7 folds) within 8 DC points and 1 fold of the measurement, with either solver.
-    With the hysteresis element's stuck spring at 5 times the bending (now 20) the three
-    specimens of B and C had 6 folds, F 8 or 9, and the implicit solver's B, at 1/300 s, 7."""
+    """Case 7 as ``party validate`` runs it: fabrics B, C and F (measured DC 49.8, 50.7 and
+    28.3 %, 5, 5 and 7 folds), the mean of three specimens within 8 DC points and 1 fold of the
+    measurement, with either solver. Single specimens differ by up to 2 folds (the implicit
+    solver's B: 7, 5 and 6), so the first alone does not decide the case. With the hysteresis
+    element's stuck spring at 5 times the bending (now 20) B and C had 6 folds, F 8.3 to 8.7,
+    and the implicit solver's B, at 1/300 s, 7."""
     for name in ("measured_B", "measured_C", "measured_F"):
-        drape, dc, nodes = measured_drapes(name, solver)
-        assert abs(100.0 * drape.coefficient - dc) <= cusick.DC_TOLERANCE, name
-        assert abs(drape.nodes - nodes) <= cusick.NODE_TOLERANCE, name
+        drapes, dc, nodes = measured_drapes(name, solver)
+        summary = cusick.summarize(drapes)
+        assert abs(summary["dc_percent"] - dc) <= cusick.DC_TOLERANCE, name
+        assert abs(summary["nodes"] - nodes) <= cusick.NODE_TOLERANCE, name

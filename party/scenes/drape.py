@@ -43,7 +43,7 @@ from ..output.metrics import body_vertices_through, cloth_crossings, max_elongat
 from ..pattern import load_pattern
 from ..model import Model
 from ..solvers.relax import SolverRelax, total_energy
-from ..solvers.settle import Settled, settle
+from ..solvers.settle import DRAPE_SWEEPS, Settled, settle
 from .garment_sim import garment_model, relax_progress, relax_time_step, sew
 
 EXPLICIT_ITERATIONS = 6000
@@ -72,13 +72,6 @@ stops: the implicit solver's truncated sweeps leave each node jittering by some 
 the shape has stopped changing. (Until this stop it relaxed like the explicit solver, and its
 energy, jittering by 3 %, met the criterion by chance while the sleeves were still falling at
 6 cm/s.)"""
-
-DRAPE_ITERATIONS = 15
-"""The implicit solver's sweeps per step in a drape, half as many again as its default: a solve
-cut short leaves the soft modes of hanging folds drifting, each step starting them a little
-off their equilibrium. GarmentCode's flare dress on mean_all came to rest after 10 s of
-draping at 30 mm and was still moving after 10 s at 20 mm with 10 sweeps, after 7 s and
-8.5 s with 15 (and after 5 s at 30 mm with 20)."""
 
 DRAPE_SECONDS = 10.0
 """Most simulated time [s] the implicit solver's drape may take; a garment still moving then
@@ -163,7 +156,7 @@ def _drape_to_rest(model: Model, progress: bool) -> tuple[Settled, list[tuple[in
 
         settled = settle(model, "implicit", memory=DRAPE_MEMORY, check_every=DRAPE_CHECK, max_seconds=DRAPE_SECONDS,
                          rest_speed=0.0, steady=_shape_steady, on_check=on_check, max_speed=DRAPE_MAX_SPEED,
-                         iterations=DRAPE_ITERATIONS)
+                         iterations=DRAPE_SWEEPS)
     return settled, energy
 
 

@@ -18,7 +18,8 @@ their mean DC and mean node count are reported. A specimen is laid with a gentle
 waviness (:func:`waviness`, about 1 mm), clamped between the pedestal and a disc of its radius,
 and let fall; its threads run straight to its edge (``mesh_panel(thread_ends=True)``), so
 bending reaches the edge; it is read when it is at rest or its shadow has stopped changing.
-The implicit solver drapes at :data:`FALL_STEP`, a third of its own step, which the fall needs.
+The implicit solver drapes at :data:`FALL_STEP`, a third of its own step, which the fall needs,
+with the drape's sweeps (:data:`~party.solvers.settle.DRAPE_SWEEPS`).
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from ..pattern.edges import arc_through_radius
 from ..pattern.pattern import Panel
 from .checks import CaseResult, Check
 from .report import figure, save
+from ..solvers.settle import DRAPE_SWEEPS
 from .simulate import settle
 
 NAME = "cusick"
@@ -224,8 +226,9 @@ def drape_test(fabric: Fabric, solver: str, spacing: float, *, drapemeter: Drape
         return abs(now.coefficient - then.coefficient) < STEADY_DC and now.nodes == then.nodes
 
     try:
+        implicit = {"dt": FALL_STEP, "iterations": DRAPE_SWEEPS} if solver == "implicit" else {}
         state, _ = settle(model, solver, collision=CollisionSettings(cloth=True), rest_speed=REST_SPEED,
-                          check_every=REST_WINDOW, steady=steady, dt=FALL_STEP if solver == "implicit" else None)
+                          check_every=REST_WINDOW, steady=steady, **implicit)
     except SimulationUnstable as problem:
         raise SimulationUnstable(f"Cusick drape of {fabric.name} at {spacing * 1000:.1f} mm: {problem}") from None
     rest = state.positions()
