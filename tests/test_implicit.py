@@ -145,6 +145,20 @@ def test_stiff_light_cloth_drapes_alike_at_case_6s_mesh_and_at_half_its_resoluti
     assert abs(fine.coefficient - coarse.coefficient) < 0.05
 
 
+def test_chebyshev_assumes_the_jacobi_bound_where_it_is_below_its_rho():
+    """A node on a spring (k, c) to a pin: the Jacobi bound is (k dt^2 + c dt) / (m + k dt^2 +
+    c dt), and the Chebyshev acceleration assumes it where it is below the given 0.9."""
+    builder = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    anchor = builder.add_node((0.0, 0.0, 0.0), 0.01)
+    bob = builder.add_node((0.1, 0.0, 0.0), 0.01)
+    builder.pin([anchor])
+    builder.add_element(anchor, bob, stiffness=50.0, damping=0.2, rest_length=0.1)
+    solver = SolverImplicit(builder.finalize(), collision=None)
+    for dt in (1e-3, 1e-2, 1.0):
+        coupled = 50.0 * dt * dt + 0.2 * dt
+        assert solver.spectral_radius(dt) == pytest.approx(min(0.9, coupled / (0.01 + coupled)), rel=1e-9)
+
+
 def test_sweeps_grow_with_stiffness_over_inertia_alike_for_a_net_and_a_membrane():
     """A cotton sheet at 25 mm keeps the given 10 sweeps at 1/300 s; at 3 mm, with 70 times
     the stiffness over inertia, it takes more, as many whether the net's springs or a
