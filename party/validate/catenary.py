@@ -17,19 +17,16 @@ from ..units import GRAVITY
 from .checks import CaseResult, Check
 from .report import plot_rest_shape, save
 from .references import distance_to_curve, elastic_catenary
-from .simulate import settle
+from .simulate import settle_until_unchanged
 
 NAME = "catenary"
 TOLERANCE = 0.01  # largest deviation over span
 LENGTH, SPAN, WIDTH = 0.5, 0.4, 0.04  # m
 SPACINGS = {"quick": 0.02, "default": 0.01}
-REST_WINDOW = 0.5  # s between checks of the hanging shape
 STEADY_DEVIATION = 1e-5
-"""Change of the largest deviation over the span within :data:`REST_WINDOW` below which the
-hanging shape is read, though its nodes still move: the implicit solver's single-precision
-round-off keeps a 1 cm chain's nodes wandering by some 3 um at 1/300 s (2e-5 to 5e-5 m/s
-between checks 0.05 s apart, whatever the sweeps), above any speed that says rest. A thousandth
-of the case's tolerance."""
+"""Change of the largest deviation over the span below which the hanging shape is read
+(:func:`~party.validate.simulate.settle_until_unchanged`): a thousandth of the case's
+tolerance."""
 
 
 def run_case(fabric: Fabric, solver: str, *, quick: bool = False, out=None) -> CaseResult:
@@ -91,14 +88,10 @@ def hang_strip(fabric: Fabric, solver: str, spacing: float) -> tuple[np.ndarray,
 
 def _settle_shape(model, solver: str, line: Callable[[np.ndarray], np.ndarray], reference: np.ndarray) -> np.ndarray:
     """Settle ``model`` and return ``line(positions)`` at rest, (x, z) [m]: at rest by the
-    solver's speed, or once the line's largest deviation from ``reference`` has changed by less
-    than :data:`STEADY_DEVIATION` of the span over each of two :data:`REST_WINDOW`."""
-
-    def steady(before: np.ndarray, after: np.ndarray) -> bool:
-        change = _deviation(line(after), reference) - _deviation(line(before), reference)
-        return abs(change) < STEADY_DEVIATION * SPAN
-
-    state, _ = settle(model, solver, collision=None, steady=steady, check_every=REST_WINDOW)
+    solver's speed, or once the line's largest deviation from ``reference`` has stopped
+    changing (:data:`STEADY_DEVIATION`)."""
+    state = settle_until_unchanged(model, solver, lambda p: _deviation(line(p), reference), STEADY_DEVIATION * SPAN,
+                                   collision=None)
     return line(state.positions())
 
 

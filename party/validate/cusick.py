@@ -41,9 +41,9 @@ from ..meshing.panel_mesh import mesh_panel
 from ..model import ModelBuilder
 from ..pattern.edges import arc_through_radius
 from ..pattern.pattern import Panel
+from ..solvers.settle import DRAPE_SWEEPS
 from .checks import CaseResult, Check
 from .report import figure, save
-from ..solvers.settle import DRAPE_SWEEPS
 from .simulate import settle
 
 NAME = "cusick"
