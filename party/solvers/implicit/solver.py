@@ -99,9 +99,9 @@ class SolverImplicit:
         n = model.node_count
         self._f_ext = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._y = wp.zeros(n, dtype=wp.vec3, device=dev)
-        self._x = wp.zeros(n, dtype=wp.vec3, device=dev)
-        self._x_previous = wp.zeros(n, dtype=wp.vec3, device=dev)
-        self._x_before = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._d = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._d_previous = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._d_before = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._correction = wp.zeros(n, dtype=wp.vec3, device=dev)
         self.chebyshev = float(chebyshev)
         offsets, other, params = node_springs(model)
@@ -217,20 +217,20 @@ class SolverImplicit:
         dev = m.device
         launch(inertial_target, dim=m.node_count,
                inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
-                       control.kinematic_velocity, self._correction, dt], outputs=[self._y, self._x], device=dev)
+                       control.kinematic_velocity, self._correction, dt], outputs=[self._y, self._d], device=dev)
         if self._sliding:
             launch(slip_in_world, dim=m.hinge_count,
                    inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
                    device=dev)
-        wp.copy(self._x_before, self._x)
+        wp.copy(self._d_before, self._d)
         if self.workers > 1:
             launch_workers(sweep_workers, self.workers, self._sync,
                            [self.sweeps(dt), self._color_offsets, self._omegas(dt)[1], self._colored, self._terms,
-                            state_in.node_q, dt, self._x, self._x_previous, self._x_before], dev)
+                            state_in.node_q, dt, self._d, self._d_previous, self._d_before], dev)
         else:
             self._sweep_by_colour(state_in.node_q, dt)
-        launch(record_correction, dim=m.node_count, inputs=[self._x, self._y, self._correction], device=dev)
-        launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._x, dt],
+        launch(record_correction, dim=m.node_count, inputs=[self._d, self._y, self._correction], device=dev)
+        launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._d, dt],
                outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
     def _sweep_by_colour(self, x_start: wp.array, dt: float) -> None:
@@ -243,14 +243,14 @@ class SolverImplicit:
         for iteration in range(self.sweeps(dt)):
             for c in range(len(offsets) - 1):
                 launch(block_descent, offsets[c + 1] - offsets[c],
-                       [offsets[c], self._colored, self._terms, x_start, dt, self._x], device=dev)
+                       [offsets[c], self._colored, self._terms, x_start, dt, self._d], device=dev)
             if len(omegas) == 0:
                 continue
             if iteration == 0:
-                wp.copy(self._x_previous, self._x)
+                wp.copy(self._d_previous, self._d)
                 continue
             launch(chebyshev_blend, dim=self.model.node_count,
-                   inputs=[self._x, self._x_previous, self._x_before, float(omegas[iteration])], device=dev)
+                   inputs=[self._d, self._d_previous, self._d_before, float(omegas[iteration])], device=dev)
 
     def _descent_terms(self) -> DescentTerms:
         """The solver's and model's arrays that the block descent reads (set once; the struct
