@@ -174,15 +174,20 @@ def main() -> None:
     except (typer.Abort, KeyboardInterrupt):
         err.print("interrupted; rerun with --resume to continue")
         raise SystemExit(130)
-    except Exception as exc:  # click usage errors
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            raise SystemExit(exc.exit_code)
-        raise
+    except Exception as exc:
+        if not _is_usage_error(exc):
+            raise
+        exc.show()
+        raise SystemExit(exc.exit_code)
     if isinstance(status, int) and status:
         raise SystemExit(status)
+
+
+def _is_usage_error(exc: Exception) -> bool:
+    """Whether ``exc`` is click's usage error (an unknown option, a missing argument), which
+    shows itself as a usage line: click's ``ClickException``, which typer 0.2x vendors as
+    ``typer._click``, so it is recognised by what it has rather than imported."""
+    return callable(getattr(exc, "show", None)) and isinstance(getattr(exc, "exit_code", None), int)
 
 
 if __name__ == "__main__":

@@ -50,6 +50,13 @@ def test_cuda_asked_for_where_there_is_none(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_unknown_option_is_a_usage_error():
+    result = party("validate", "--no-such-option")
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "Error: No such option: --no-such-option"
+
+
 def test_scenes_are_listed():
     result = party("scenes")
     assert result.returncode == 0 and result.stdout.startswith("rod-wind")
