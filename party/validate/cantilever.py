@@ -43,11 +43,9 @@ ROWS = 4  # spaces across the simulated strip (see overhang_shape)
 SEGMENTS = {"quick": 40, "default": 60}  # spaces along the overhang
 CLAMPED_COLUMNS = 2  # columns held on the ledge behind its edge
 STEADY_CHORD = 2e-3
-"""Change of the chord angle [degrees] below which the strip's shape is read
-(:func:`~party.validate.simulate.settle_until_unchanged`): with the implicit solver a strip of
-60 segments (0.6 mm) creeps its last micrometres over tens of seconds amid round-off, and met a
-speed criterion by chance or ran to 300 s. A 1 % longer strip turns the chord by about 1
-degree."""
+"""Change of the chord angle [degrees] over each of two windows below which the strip's shape
+is read (:func:`~party.validate.simulate.settle_until_unchanged`, whose docstring says why a
+speed alone will not do). A 1 % longer strip turns the chord by about 1 degree."""
 
 
 def run_case(fabric: Fabric, solver: str, *, quick: bool = False, out=None) -> CaseResult:
