@@ -104,9 +104,11 @@ def bending_length_test(fabric: Fabric, solver: str, segments: int) -> tuple[flo
     return estimate(), best, tried[best]
 
 
-def overhang_shape(fabric: Fabric, solver: str, overhang: float, segments: int) -> np.ndarray:
-    """The rest shape of a strip sticking ``overhang`` [m] out over the ledge: its centre line
-    as (x, z) [m] from the ledge's edge, the clamped part left out.
+def overhang_shape(fabric: Fabric, solver: str, overhang: float, segments: int,
+                   edge: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """The rest shape of a strip sticking ``overhang`` [m] out over the ledge, whose edge's
+    middle is at ``edge`` [m]: its centre line as (x, z) [m] from the ledge's edge, the
+    clamped part left out.
 
     The strip simulated is ROWS spaces wide rather than the standard's 25 mm: bending along
     the strip (Poisson's ratio 0) does not depend on the width, and the clamp's error is
@@ -117,7 +119,7 @@ def overhang_shape(fabric: Fabric, solver: str, overhang: float, segments: int) 
     net = rectangular_net(overhang + behind, ROWS * spacing, spacing)
     u, v = net.uv[:, 0] - behind, net.uv[:, 1]
     builder = ModelBuilder()
-    builder.add_cloth(net, fabric, np.c_[u, v, np.zeros(net.node_count)])
+    builder.add_cloth(net, fabric, np.c_[u, v, np.zeros(net.node_count)] + np.asarray(edge, float))
     builder.pin(np.flatnonzero(u < 1e-9 * overhang))
     model = builder.finalize()
     middle = np.abs(v - v[np.argmin(np.abs(v - 0.5 * v.max()))]) < 1e-9 * overhang
