@@ -18,16 +18,17 @@ def inertial_target(
     previous_correction: wp.array(dtype=wp.vec3),
     dt: float,
     y: wp.array(dtype=wp.vec3),
-    d: wp.array(dtype=wp.vec3),
+    disp: wp.array(dtype=wp.vec3),
 ):
     """y = v dt + (G + f_ext / m) dt^2, the step inertia alone would take the node [m], and
-    the sweeps' starting displacement d.
+    the sweeps' starting displacement ``disp``.
 
     The solve works on the step's displacements d = x - x(t), not on positions: a sweep's
     correction to a node is often below the round-off of a single-precision position (2e-9 m
     at 3 cm, 6e-8 m at 1 m), and would be lost; a displacement resolves it. A cotton
     cantilever of 0.6 mm segments stalled with its chord at 43.6 degrees at 3 cm from the
-    origin and at 65.6 degrees at 1 m, against 42.4 at rest; it now reaches 42.4 wherever it is.
+    origin and at 65.6 degrees at 1 m, against 42.4 at rest; it now rests at 42.4 (43.1 at
+    1 m, where the state's own round-off jitters it; see docs/design.md).
 
     The iterate starts at y, moved back against gravity by as much as the last solve moved the
     node back from its own y (between nothing and the whole of G dt^2; after Chen et al.'s
@@ -39,7 +40,7 @@ def inertial_target(
     i = wp.tid()
     if inv_mass[i] == 0.0:
         y[i] = kinematic_velocity[i] * dt
-        d[i] = y[i]
+        disp[i] = y[i]
     else:
         y[i] = v[i] * dt + (gravity + f_ext[i] * inv_mass[i]) * dt * dt
         start = y[i]
@@ -48,30 +49,31 @@ def inertial_target(
             down = gravity / g
             back = wp.clamp(wp.dot(previous_correction[i], down), -g * dt * dt, 0.0)
             start = start + back * down
-        d[i] = start
+        disp[i] = start
 
 
 @wp.func
-def moved(x_start: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), k: int, i: int) -> wp.vec3:
+def moved(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: int, i: int) -> wp.vec3:
     """x_k - x_i at the iterate, (x_k(t) - x_i(t)) + (d_k - d_i) [m]: both differences of
     nearby numbers, so that neither loses a displacement to a position's round-off."""
-    return (x_start[k] - x_start[i]) + (d[k] - d[i])
+    return (x_start[k] - x_start[i]) + (disp[k] - disp[i])
 
 
 @wp.func
-def moved_curvature(x_start: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), n: wp.vec4i,
+def moved_curvature(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), n: wp.vec4i,
                     w: wp.vec4) -> wp.vec3:
     """A bending stencil's curvature vector sum_i K_i x_i at the iterate [1/m], as
     sum_i K_i (x_i - x_0) (the weights sum to zero; :mod:`party.meshing.hinges`)."""
-    return (w[1] * moved(x_start, d, n[1], n[0]) + w[2] * moved(x_start, d, n[2], n[0])
-            + w[3] * moved(x_start, d, n[3], n[0]))
+    return (w[1] * moved(x_start, disp, n[1], n[0]) + w[2] * moved(x_start, disp, n[2], n[0])
+            + w[3] * moved(x_start, disp, n[3], n[0]))
 
 
 @wp.kernel
-def record_correction(d: wp.array(dtype=wp.vec3), y: wp.array(dtype=wp.vec3), correction: wp.array(dtype=wp.vec3)):
+def record_correction(disp: wp.array(dtype=wp.vec3), y: wp.array(dtype=wp.vec3),
+                      correction: wp.array(dtype=wp.vec3)):
     """The solve's correction d - y to the inertial target [m], for the next step's start."""
     i = wp.tid()
-    correction[i] = d[i] - y[i]
+    correction[i] = disp[i] - y[i]
 
 
 @wp.struct
@@ -82,7 +84,8 @@ class MembraneTerms:
 
 @wp.func
 def membrane_gradient(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3),
-                      tris: wp.array(dtype=int, ndim=2), d: wp.mat22, c: wp.mat33, t: int, corner: int) -> MembraneTerms:
+                      tris: wp.array(dtype=int, ndim=2), d: wp.mat22, c: wp.mat33, t: int,
+                      corner: int) -> MembraneTerms:
     """Per unit rest area, the gradient of a triangle's St. Venant-Kirchhoff membrane energy
     (E : C : E / 2, E the Green strain in the warp-aligned rest frame) with respect to one
     corner, and its Gauss-Newton Hessian block (positive semi-definite; the stress term only
@@ -143,7 +146,8 @@ class DescentTerms:
 
 
 @wp.func
-def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float, disp: wp.array(dtype=wp.vec3)):
+def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
+                 disp: wp.array(dtype=wp.vec3)):
     """One Newton step on one node's share of the incremental potential, in the node's
     displacement d_i = x_i - x_i(t) (``disp``; see :func:`inertial_target`),
 
@@ -156,11 +160,12 @@ def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), 
     c (v_k - v_i) with v = (x - x(t)) / dt contribute c / dt I. The hinges' energy is the
     quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h K_h K_h^T
     (``bend_*``: row i of L, its diagonal included; its rows sum to zero), so they add
-    (L x)_i = sum_j L_ij (x_j - x_i) to the gradient and L_ii I to the Hessian. Membrane triangles add their St. Venant-Kirchhoff terms
-    (:func:`membrane_gradient`). Bending hysteresis's elements (``slider_*``: each node's
-    stencils with a slider, entries stencil * 4 + the node's corner) add K_i times their
-    returned moment (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the
-    step's start in ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
+    (L x)_i = sum_j L_ij (x_j - x_i) to the gradient and L_ii I to the Hessian. Membrane
+    triangles add their St. Venant-Kirchhoff terms (:func:`membrane_gradient`). Bending
+    hysteresis's elements (``slider_*``: each node's stencils with a slider, entries stencil * 4
+    + the node's corner) add K_i times their returned moment
+    (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the step's start in
+    ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
     """
     if terms.inv_mass[i] == 0.0:
         return
