@@ -106,9 +106,9 @@ def bending_length_test(fabric: Fabric, solver: str, segments: int) -> tuple[flo
 
 def overhang_shape(fabric: Fabric, solver: str, overhang: float, segments: int,
                    edge: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> np.ndarray:
-    """The rest shape of a strip sticking ``overhang`` [m] out over the ledge, whose edge's
-    middle is at ``edge`` [m]: its centre line as (x, z) [m] from the ledge's edge, the
-    clamped part left out.
+    """The rest shape of a strip sticking ``overhang`` [m] out along x over the ledge, whose
+    edge runs along y from ``edge`` [m]: its centre line as (x, z) [m] from the ledge's edge,
+    the clamped part left out.
 
     The strip simulated is ROWS spaces wide rather than the standard's 25 mm: bending along
     the strip (Poisson's ratio 0) does not depend on the width, and the clamp's error is

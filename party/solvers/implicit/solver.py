@@ -50,9 +50,10 @@ class SolverImplicit:
     """Implicit (backward) Euler on the paper's net plus shear diagonals, bending hinges and
     the optional continuum membrane, solved by Vertex Block Descent (VBD, Chen et al. 2024):
     each iteration visits the nodes colour by colour and moves each to the minimum of its local
-    incremental potential (one 3x3 Newton step). Steps of 1/60 s in a few substeps stay stable
-    for every library fabric (tested), at the cost of the stiffest modes being damped and, for
-    stiff fabrics at few sweeps, an approximate solve (see docs/design.md).
+    incremental potential (one 3x3 Newton step, in the step's displacement, which single
+    precision resolves where a position would lose it). Steps of 1/60 s in a few substeps stay
+    stable for every library fabric (tested), at the cost of the stiffest modes being damped
+    and, for stiff fabrics at few sweeps, an approximate solve (see docs/design.md).
 
     The step ends as the explicit one does (:class:`party.solvers.step_end.StepEnd`): the
     velocity the solve proposes, v* = (x - x(t)) / dt, goes through the plastic limit and the
