@@ -11,7 +11,7 @@ from ..collision.crossing_guard import CrossingGuard
 from ..errors import InvalidInput
 from ..launch import launch
 from ..model import Model, State
-from .explicit.kernels import advance_positions, cap_speed, next_sweep, plastic_limit
+from .explicit.kernels import advance_positions, cap_speed, next_sweep, plastic_limit, plastic_limit_sweeps
 from .hysteresis import BendingHysteresis
 
 PLASTIC_TOLERANCE = 5.0e-5
@@ -122,27 +122,46 @@ class StepEnd:
 
     def _apply_plastic_limit(self, state: State, dt: float, over_relaxation: float = 1.0) -> int:
         """Gauss-Seidel sweeps over the element colours until a sweep finds no element beyond
-        its limit (to :data:`PLASTIC_TOLERANCE`), at most ``plastic_passes`` sweeps; reads one
-        counter from the device per sweep, each correction scaled by ``over_relaxation``. Caps
+        its limit (to :data:`PLASTIC_TOLERANCE`), at most ``plastic_passes`` sweeps, each
+        correction scaled by ``over_relaxation``. Caps
         the speeds at ``max_speed`` after, where one is set. Returns the number of sweeps.
 
-        On the CPU a sweep is one launch over all colours in order: Warp runs a CPU launch's
-        threads one after another, so that is the same sweep as one launch per colour without
-        the launch overhead (some 15 us per launch, which made the plastic limit a third of
-        a garment drape's time). Sweeps after the first leave out the elements whose nodes no
-        correction has changed since the last sweep began (:func:`plastic_limit`): the same
+        On the CPU every sweep runs in one launch of one thread (:func:`plastic_limit_sweeps`):
+        Warp runs a CPU launch's threads one after another anyway, so that is the same sweeps as
+        one launch per colour, without the launches and the read of the count between sweeps
+        (some 15 us per launch, which made the plastic limit a third of a garment drape's time;
+        and a large step of a garment at rest may take all the sweeps: GarmentCode's flare dress
+        took 32 in both limits of every step of its implicit drape, 3.3 ms of a step's 18 as
+        launches and reads). Sweeps after the first leave out the elements whose nodes no
+        correction has changed since the last sweep began (:func:`limit_element`): the same
         sweeps, bit for bit, over the few elements still at work. The nodes any correction
         changed are non-zero in ``_moved_in``."""
         m = self.model
-        offsets = m.element_color_offsets
-        launches = [(0, len(m.element_colored))] if self._serial else list(zip(offsets[:-1], np.diff(offsets)))
-        sweeps = 0
         self._moved_in.zero_()
+        if self._serial:
+            launch(plastic_limit_sweeps, dim=1,
+                   inputs=[m.element_colored, state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes,
+                           m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
+                           int(PLASTIC_SKIPS_UNCHANGED), int(self.plastic_passes), self._moved_in, self._sweep_number],
+                   device=m.device)
+            sweeps = int(self._sweep_number.numpy()[0])
+        else:
+            sweeps = self._sweep_by_colour(state, dt, over_relaxation)
+        if self.max_speed is not None:
+            launch(cap_speed, dim=m.node_count, inputs=[state.node_qd, float(self.max_speed)], device=m.device)
+        return sweeps
+
+    def _sweep_by_colour(self, state: State, dt: float, over_relaxation: float) -> int:
+        """The plastic limit's sweeps as one launch per colour (CUDA), reading the count of
+        elements beyond after each sweep; returns the number of sweeps."""
+        m = self.model
+        offsets = m.element_color_offsets
+        sweeps = 0
         self._sweep_number.zero_()
         while sweeps < self.plastic_passes:
             sweeps += 1
             launch(next_sweep, dim=1, inputs=[self._sweep_number, self._over_limit], device=m.device)
-            for offset, count in launches:
+            for offset, count in zip(offsets[:-1], np.diff(offsets)):
                 launch(plastic_limit, dim=int(count),
                        inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
                                m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
@@ -150,6 +169,4 @@ class StepEnd:
                        device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break
-        if self.max_speed is not None:
-            launch(cap_speed, dim=m.node_count, inputs=[state.node_qd, float(self.max_speed)], device=m.device)
         return sweeps

@@ -83,6 +83,64 @@ def end_of_step_span(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), i: 
     return (x[k] + v[k] * dt) - (x[i] + v[i] * dt)
 
 
+@wp.func
+def limit_element(
+    e: int,
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    elem_nodes: wp.array(dtype=wp.vec2i),
+    max_length: wp.array(dtype=float),
+    dt: float,
+    tolerance: float,
+    over_relaxation: float,
+    skip_unchanged: int,
+    sweep: int,
+    moved_in: wp.array(dtype=int),
+) -> int:
+    """f_plas (section 5, figure 5) on element e: an element may not stretch beyond
+    (1 + L_sh) l0.
+
+    For an element whose length at the end of the step, |(r_k + v_k dt) - (r_i + v_i dt)|,
+    would pass the limit, the relative velocity that stretches it further is cancelled (split
+    by inverse mass), which is the force component f_plas removes; ``over_relaxation`` > 1
+    cancels that much more (projected successive over-relaxation, see
+    :class:`~party.solvers.step_end.StepEnd`). Returns 1 where the element was beyond (1 +
+    ``tolerance``) times its limit.
+
+    Each node a correction changes is marked in ``moved_in`` with the number of the sweep
+    (from 1). With ``skip_unchanged`` 1, from the second sweep on, an element neither of whose
+    nodes a correction has moved in the last sweep or so far in this one is left out: it is as
+    it was when the last sweep found it within its limit.
+    """
+    pair = elem_nodes[e]
+    i = pair[0]
+    k = pair[1]
+    if skip_unchanged == 1 and sweep > 1 and wp.max(moved_in[i], moved_in[k]) < sweep - 1:
+        return 0
+    wi = inv_mass[i]
+    wk = inv_mass[k]
+    if wi + wk == 0.0:
+        return 0
+    p = end_of_step_span(x, v, i, k, dt)
+    length = wp.length(p)
+    limit = max_length[e]
+    if length <= limit:
+        return 0
+    beyond = int(0)
+    if length > limit * (1.0 + tolerance):
+        beyond = 1
+    direction = p / length
+    excess = over_relaxation * (length - limit) / (dt * (wi + wk))
+    v[i] = v[i] + direction * (excess * wi)
+    v[k] = v[k] - direction * (excess * wk)
+    if wi > 0.0:
+        moved_in[i] = sweep
+    if wk > 0.0:
+        moved_in[k] = sweep
+    return beyond
+
+
 @wp.kernel
 def plastic_limit(
     colored: wp.array(dtype=int),
@@ -100,47 +158,45 @@ def plastic_limit(
     moved_in: wp.array(dtype=int),
     over: wp.array(dtype=int),
 ):
-    """f_plas (section 5, figure 5): an element may not stretch beyond (1 + L_sh) l0.
-
-    For an element whose length at the end of the step, |(r_k + v_k dt) - (r_i + v_i dt)|,
-    would pass the limit, the relative velocity that stretches it further is cancelled (split
-    by inverse mass), which is the force component f_plas removes; ``over_relaxation`` > 1
-    cancels that much more (projected successive over-relaxation, see
-    :class:`~party.solvers.step_end.StepEnd`). Elements of one colour share no node, so a
-    colour is processed in parallel; colours run one after another. ``over`` counts the
-    elements found beyond (1 + ``tolerance``) times their limit.
-
-    Each node a correction changes is marked in ``moved_in`` with the number of the sweep
-    (``sweep_number[0]``, from 1). With ``skip_unchanged`` 1, from the second sweep on, an
-    element neither of whose nodes a correction has moved in the last sweep or so far in this
-    one is left out: it is as it was when the last sweep found it within its limit.
-    """
-    e = colored[offset + wp.tid()]
-    pair = elem_nodes[e]
-    i = pair[0]
-    k = pair[1]
-    sweep = sweep_number[0]
-    if skip_unchanged == 1 and sweep > 1 and wp.max(moved_in[i], moved_in[k]) < sweep - 1:
-        return
-    wi = inv_mass[i]
-    wk = inv_mass[k]
-    if wi + wk == 0.0:
-        return
-    p = end_of_step_span(x, v, i, k, dt)
-    length = wp.length(p)
-    limit = max_length[e]
-    if length <= limit:
-        return
-    if length > limit * (1.0 + tolerance):
+    """One colour's share of a sweep of the plastic limit (:func:`limit_element`), in the sweep
+    ``sweep_number[0]``. Elements of one colour share no node, so a colour is processed in
+    parallel; colours run one after another. ``over`` counts the elements found beyond (1 +
+    ``tolerance``) times their limit."""
+    if limit_element(colored[offset + wp.tid()], x, v, inv_mass, elem_nodes, max_length, dt, tolerance,
+                     over_relaxation, skip_unchanged, sweep_number[0], moved_in) != 0:
         wp.atomic_add(over, 0, 1)
-    direction = p / length
-    excess = over_relaxation * (length - limit) / (dt * (wi + wk))
-    v[i] = v[i] + direction * (excess * wi)
-    v[k] = v[k] - direction * (excess * wk)
-    if wi > 0.0:
-        moved_in[i] = sweep
-    if wk > 0.0:
-        moved_in[k] = sweep
+
+
+@wp.kernel
+def plastic_limit_sweeps(
+    colored: wp.array(dtype=int),
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    elem_nodes: wp.array(dtype=wp.vec2i),
+    max_length: wp.array(dtype=float),
+    dt: float,
+    tolerance: float,
+    over_relaxation: float,
+    skip_unchanged: int,
+    max_sweeps: int,
+    moved_in: wp.array(dtype=int),
+    sweeps: wp.array(dtype=int),
+):
+    """Every sweep of the plastic limit in one thread (the CPU's serial launch): sweeps over
+    all elements in colour order until one finds none beyond (1 + ``tolerance``) times its
+    limit, at most ``max_sweeps``; the number taken goes to ``sweeps[0]``. The same sweeps as
+    :func:`plastic_limit` over the colours, with no launch or read of the count between them."""
+    sweep = int(0)
+    while sweep < max_sweeps:
+        sweep += 1
+        beyond = int(0)
+        for j in range(colored.shape[0]):
+            beyond += limit_element(colored[j], x, v, inv_mass, elem_nodes, max_length, dt, tolerance,
+                                    over_relaxation, skip_unchanged, sweep, moved_in)
+        if beyond == 0:
+            break
+    sweeps[0] = sweep
 
 
 @wp.kernel
