@@ -61,6 +61,32 @@ def keep_candidate(i: int, t: int, x0: wp.vec3, x: wp.array(dtype=wp.vec3), v: w
 
 
 @wp.kernel
+def sum_motion(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_ref: wp.array(dtype=wp.vec3),
+               total: wp.array(dtype=wp.vec3)):
+    """Sum the nodes' displacements since the search, x - x_ref [m], into ``total[0]`` and
+    their velocities [m/s] into ``total[1]`` (a plain launch: one thread on the CPU)."""
+    i = wp.tid()
+    wp.atomic_add(total, 0, x[i] - x_ref[i])
+    wp.atomic_add(total, 1, v[i])
+
+
+@wp.kernel
+def moved_beyond(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_ref: wp.array(dtype=wp.vec3),
+                 total: wp.array(dtype=wp.vec3), share: float, dt: float, margin: float, flag: wp.array(dtype=int)):
+    """Flag when some node may have left the region its remembered candidates were searched
+    for: when its displacement since the search plus its step, each beyond the mean of all
+    nodes' (``share`` times ``total``, :func:`sum_motion`), pass half the ``margin`` [m]. A
+    motion common to all nodes brings no node nearer a triangle, and the contacts are judged
+    on relative steps (:func:`detect_cloth`), so a node and a triangle whose nodes all stay
+    within half the margin of that common motion come no nearer than the margin allowed for.
+    Cloth falling as a whole keeps its candidates."""
+    i = wp.tid()
+    moved = x[i] - x_ref[i] - share * total[0]
+    if wp.length(moved) + wp.length(v[i] - share * total[1]) * dt > 0.5 * margin:
+        flag[0] = 1
+
+
+@wp.kernel
 def gather_cloth_triangles_bvh(
     first: int,
     x: wp.array(dtype=wp.vec3),

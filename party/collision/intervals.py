@@ -145,21 +145,6 @@ def _reset_bounds(bounds: wp.array(dtype=float)):
         bounds[a] = -1.0e30
 
 
-@wp.kernel
-def moved_beyond(
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    x_ref: wp.array(dtype=wp.vec3),
-    dt: float,
-    margin: float,
-    flag: wp.array(dtype=int),
-):
-    """Flag when some node has left the region its remembered candidates were searched for."""
-    i = wp.tid()
-    if wp.length(x[i] - x_ref[i]) + wp.length(v[i]) * dt > 0.5 * margin:
-        flag[0] = 1
-
-
 class AxisIntervalLists:
     """Interval lists over a fixed set of triangles whose vertices may move.
 

@@ -15,8 +15,8 @@ from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_
 from .body_vertices import MAX_VERTICES, gather_body_vertices, respond_body_vertices, vertex_boxes
 from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
-                    gather_cloth_triangles_bvh, respond_cloth)
-from .intervals import AxisIntervalLists, moved_beyond
+                    gather_cloth_triangles_bvh, moved_beyond, respond_cloth, sum_motion)
+from .intervals import AxisIntervalLists
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,8 @@ class CollisionSettings:
             against the body, so no node ends a step inside it.
         search_margin: Extra reach of the interval-list search [m]. The triangles found are
             remembered and the search is repeated only once some node has moved half this
-            far, so a larger margin means fewer searches but more candidates.
+            far (for the cloth's own triangles: beyond the motion common to all nodes), so a
+            larger margin means fewer searches but more candidates.
         max_cells: Largest number of intervals per axis in the interval lists.
         crossing_guard: Check steps' ends for edges newly through triangles and revert them
             (:mod:`party.collision.crossing_guard`).
@@ -111,6 +112,7 @@ class CollisionPipeline:
         self._flag = wp.ones(1, dtype=int, device=dev)
         self._overflow = wp.zeros(1, dtype=int, device=dev)
         self._x_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._motion = wp.zeros(2, dtype=wp.vec3, device=dev)
         self._thickness = float(model.node_thickness.numpy().max())
         if self.has_body:
             colliders = model.host["colliders"]
@@ -164,7 +166,8 @@ class CollisionPipeline:
 
         Repeats the search of the body's triangles and vertices for each node and cloth triangle
         that may have left the region searched for it last time, and that of the cloth's
-        triangles, for every node, once some node may have (this reads one flag from the
+        triangles, for every node, once some node may have moved so, beyond the motion common to
+        all nodes (:func:`~party.collision.cloth.moved_beyond`; this reads one flag from the
         device); ``search=False`` reuses the last searches' candidates (a second pass within one
         step).
 
@@ -185,7 +188,10 @@ class CollisionPipeline:
         if search and self.has_body:
             self._search_body(x, v, state, dt)
         if search and self.has_cloth:
-            launch(moved_beyond, dim=m.node_count, inputs=[x, v, self._x_ref, dt, self.margin, self._flag],
+            self._motion.zero_()
+            launch(sum_motion, dim=m.node_count, inputs=[x, v, self._x_ref, self._motion], device=dev)
+            launch(moved_beyond, dim=m.node_count,
+                   inputs=[x, v, self._x_ref, self._motion, 1.0 / m.node_count, dt, self.margin, self._flag],
                    device=dev)
             if int(self._flag.numpy()[0]):
                 self._search_cloth(x, v, dt)
@@ -284,7 +290,8 @@ class CollisionPipeline:
 
     def _search_cloth(self, x: wp.array, v: wp.array, dt: float) -> None:
         """Search the cloth's triangles again for every node: a node stays within margin/2 of
-        where it was searched from (else a new search), and so does every cloth triangle's node:
+        where it was searched from, beyond the nodes' common motion (else a new search), and so
+        does every cloth triangle's node:
         node boxes grow by eps + margin/2 and cloth triangle boxes by margin/2."""
         m = self.model
         dev = m.device
