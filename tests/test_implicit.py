@@ -323,6 +323,30 @@ def test_crossing_guard_testing_every_edge_without_lists_finds_what_its_lists_fi
     assert np.array_equal(direct.final_points, listed.final_points)
 
 
+def test_crossing_guard_rechecking_the_reverted_nodes_finds_what_checking_everything_finds(monkeypatch):
+    """After a round of reverts the guard tests only the edges and triangles at the nodes it
+    reverted (and the edges it marked): on the falling strips, whose checks take several
+    rounds, that reverts the same nodes and ends bit for bit where checking every pair again
+    does."""
+    import party.collision.crossing_guard as guard
+
+    rechecks = []
+    recheck = guard.CrossingGuard._recheck
+
+    def counted(self, x):
+        rechecks.append(1)
+        return recheck(self, x)
+
+    monkeypatch.setattr(guard.CrossingGuard, "_recheck", counted)
+    counts, partial = crossing_strips(guard=True)
+    assert len(rechecks) > 5
+    monkeypatch.setattr(guard.CrossingGuard, "_recheck", lambda self, x: guard.CrossingGuard._check(self, x))
+    full_counts, full = crossing_strips(guard=True)
+    assert partial.end.guard.reverts == full.end.guard.reverts > 0
+    assert np.array_equal(counts, full_counts) and counts.max() == 0
+    assert np.array_equal(partial.final_points, full.final_points)
+
+
 def test_crossing_guard_keeps_its_lists_while_the_cloth_moves_as_a_whole():
     """Two layers 2 mm apart carried 10 cm sideways and down, 4 mm per check (beyond half the
     lists' reach): no pair comes closer, so the guard lists once and reverts nothing; the
