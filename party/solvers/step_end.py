@@ -11,7 +11,8 @@ from ..collision.crossing_guard import CrossingGuard
 from ..errors import InvalidInput
 from ..launch import launch
 from ..model import Model, State
-from .explicit.kernels import advance_positions, cap_speed, next_sweep, plastic_limit, plastic_limit_sweeps
+from .explicit.kernels import (PlasticLimit, advance_positions, cap_speed, next_sweep, plastic_limit,
+                               plastic_limit_sweeps)
 from .hysteresis import BendingHysteresis
 
 PLASTIC_TOLERANCE = 5.0e-5
@@ -83,6 +84,7 @@ class StepEnd:
         self._over_limit = wp.zeros(1, dtype=int, device=model.device)
         self._moved_in = wp.zeros(model.node_count, dtype=int, device=model.device)
         self._sweep_number = wp.zeros(1, dtype=int, device=model.device)
+        self._limits: dict[float, PlasticLimit] = {}
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = len(model.element_colored) > 0
         self._serial = wp.get_device(model.device).is_cpu
@@ -137,21 +139,32 @@ class StepEnd:
         sweeps, bit for bit, over the few elements still at work. The nodes any correction
         changed are non-zero in ``_moved_in``."""
         m = self.model
+        limit = self._limits.get(float(over_relaxation)) or self._limit(over_relaxation)
         self._moved_in.zero_()
         if self._serial:
             launch(plastic_limit_sweeps, dim=1,
-                   inputs=[m.element_colored, state.node_q, state.node_qd, m.node_inv_mass, m.element_nodes,
-                           m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
-                           int(PLASTIC_SKIPS_UNCHANGED), int(self.plastic_passes), self._moved_in, self._sweep_number],
-                   device=m.device)
+                   inputs=[limit, state.node_q, state.node_qd, dt, int(self.plastic_passes), self._moved_in,
+                           self._sweep_number], device=m.device)
             sweeps = int(self._sweep_number.numpy()[0])
         else:
-            sweeps = self._sweep_by_colour(state, dt, over_relaxation)
+            sweeps = self._sweep_by_colour(limit, state, dt)
         if self.max_speed is not None:
             launch(cap_speed, dim=m.node_count, inputs=[state.node_qd, float(self.max_speed)], device=m.device)
         return sweeps
 
-    def _sweep_by_colour(self, state: State, dt: float, over_relaxation: float) -> int:
+    def _limit(self, over_relaxation: float) -> PlasticLimit:
+        """The plastic limit's arrays and settings with ``over_relaxation`` (made once for each,
+        so that its launches are replayed)."""
+        m = self.model
+        limit = PlasticLimit()
+        limit.colored, limit.elem_nodes = m.element_colored, m.element_nodes
+        limit.max_length, limit.inv_mass = m.element_max_length, m.node_inv_mass
+        limit.tolerance, limit.over_relaxation = PLASTIC_TOLERANCE, float(over_relaxation)
+        limit.skip_unchanged = int(PLASTIC_SKIPS_UNCHANGED)
+        self._limits[float(over_relaxation)] = limit
+        return limit
+
+    def _sweep_by_colour(self, limit: PlasticLimit, state: State, dt: float) -> int:
         """The plastic limit's sweeps as one launch per colour (CUDA), reading the count of
         elements beyond after each sweep; returns the number of sweeps."""
         m = self.model
@@ -163,10 +176,8 @@ class StepEnd:
             launch(next_sweep, dim=1, inputs=[self._sweep_number, self._over_limit], device=m.device)
             for offset, count in zip(offsets[:-1], np.diff(offsets)):
                 launch(plastic_limit, dim=int(count),
-                       inputs=[m.element_colored, int(offset), state.node_q, state.node_qd, m.node_inv_mass,
-                               m.element_nodes, m.element_max_length, dt, PLASTIC_TOLERANCE, float(over_relaxation),
-                               int(PLASTIC_SKIPS_UNCHANGED), self._sweep_number, self._moved_in, self._over_limit],
-                       device=m.device)
+                       inputs=[limit, int(offset), state.node_q, state.node_qd, dt, self._sweep_number,
+                               self._moved_in, self._over_limit], device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break
         return sweeps

@@ -83,21 +83,25 @@ def end_of_step_span(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), i: 
     return (x[k] + v[k] * dt) - (x[i] + v[i] * dt)
 
 
+@wp.struct
+class PlasticLimit:
+    """What every sweep of the plastic limit reads: the elements in colour order (``colored``,
+    element ids), their nodes and longest lengths (1 + L_sh) l0 [m], the nodes' inverse masses
+    [1/kg], the relative ``tolerance`` beyond the limit that counts, ``over_relaxation`` and
+    ``skip_unchanged`` (see :func:`limit_element`)."""
+
+    colored: wp.array(dtype=int)
+    elem_nodes: wp.array(dtype=wp.vec2i)
+    max_length: wp.array(dtype=float)
+    inv_mass: wp.array(dtype=float)
+    tolerance: float
+    over_relaxation: float
+    skip_unchanged: int
+
+
 @wp.func
-def limit_element(
-    e: int,
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    inv_mass: wp.array(dtype=float),
-    elem_nodes: wp.array(dtype=wp.vec2i),
-    max_length: wp.array(dtype=float),
-    dt: float,
-    tolerance: float,
-    over_relaxation: float,
-    skip_unchanged: int,
-    sweep: int,
-    moved_in: wp.array(dtype=int),
-) -> int:
+def limit_element(limit: PlasticLimit, e: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
+                  sweep: int, moved_in: wp.array(dtype=int)) -> int:
     """f_plas (section 5, figure 5) on element e: an element may not stretch beyond
     (1 + L_sh) l0.
 
@@ -113,25 +117,25 @@ def limit_element(
     nodes a correction has moved in the last sweep or so far in this one is left out: it is as
     it was when the last sweep found it within its limit.
     """
-    pair = elem_nodes[e]
+    pair = limit.elem_nodes[e]
     i = pair[0]
     k = pair[1]
-    if skip_unchanged == 1 and sweep > 1 and wp.max(moved_in[i], moved_in[k]) < sweep - 1:
+    if limit.skip_unchanged == 1 and sweep > 1 and wp.max(moved_in[i], moved_in[k]) < sweep - 1:
         return 0
-    wi = inv_mass[i]
-    wk = inv_mass[k]
+    wi = limit.inv_mass[i]
+    wk = limit.inv_mass[k]
     if wi + wk == 0.0:
         return 0
     p = end_of_step_span(x, v, i, k, dt)
     length = wp.length(p)
-    limit = max_length[e]
-    if length <= limit:
+    longest = limit.max_length[e]
+    if length <= longest:
         return 0
     beyond = int(0)
-    if length > limit * (1.0 + tolerance):
+    if length > longest * (1.0 + limit.tolerance):
         beyond = 1
     direction = p / length
-    excess = over_relaxation * (length - limit) / (dt * (wi + wk))
+    excess = limit.over_relaxation * (length - longest) / (dt * (wi + wk))
     v[i] = v[i] + direction * (excess * wi)
     v[k] = v[k] - direction * (excess * wk)
     if wi > 0.0:
@@ -142,47 +146,20 @@ def limit_element(
 
 
 @wp.kernel
-def plastic_limit(
-    colored: wp.array(dtype=int),
-    offset: int,
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    inv_mass: wp.array(dtype=float),
-    elem_nodes: wp.array(dtype=wp.vec2i),
-    max_length: wp.array(dtype=float),
-    dt: float,
-    tolerance: float,
-    over_relaxation: float,
-    skip_unchanged: int,
-    sweep_number: wp.array(dtype=int),
-    moved_in: wp.array(dtype=int),
-    over: wp.array(dtype=int),
-):
+def plastic_limit(limit: PlasticLimit, offset: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+                  dt: float, sweep_number: wp.array(dtype=int), moved_in: wp.array(dtype=int),
+                  over: wp.array(dtype=int)):
     """One colour's share of a sweep of the plastic limit (:func:`limit_element`), in the sweep
     ``sweep_number[0]``. Elements of one colour share no node, so a colour is processed in
     parallel; colours run one after another. ``over`` counts the elements found beyond (1 +
     ``tolerance``) times their limit."""
-    if limit_element(colored[offset + wp.tid()], x, v, inv_mass, elem_nodes, max_length, dt, tolerance,
-                     over_relaxation, skip_unchanged, sweep_number[0], moved_in) != 0:
+    if limit_element(limit, limit.colored[offset + wp.tid()], x, v, dt, sweep_number[0], moved_in) != 0:
         wp.atomic_add(over, 0, 1)
 
 
 @wp.kernel
-def plastic_limit_sweeps(
-    colored: wp.array(dtype=int),
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    inv_mass: wp.array(dtype=float),
-    elem_nodes: wp.array(dtype=wp.vec2i),
-    max_length: wp.array(dtype=float),
-    dt: float,
-    tolerance: float,
-    over_relaxation: float,
-    skip_unchanged: int,
-    max_sweeps: int,
-    moved_in: wp.array(dtype=int),
-    sweeps: wp.array(dtype=int),
-):
+def plastic_limit_sweeps(limit: PlasticLimit, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
+                         max_sweeps: int, moved_in: wp.array(dtype=int), sweeps: wp.array(dtype=int)):
     """Every sweep of the plastic limit in one thread (the CPU's serial launch): sweeps over
     all elements in colour order until one finds none beyond (1 + ``tolerance``) times its
     limit, at most ``max_sweeps``; the number taken goes to ``sweeps[0]``. The same sweeps as
@@ -191,9 +168,8 @@ def plastic_limit_sweeps(
     while sweep < max_sweeps:
         sweep += 1
         beyond = int(0)
-        for j in range(colored.shape[0]):
-            beyond += limit_element(colored[j], x, v, inv_mass, elem_nodes, max_length, dt, tolerance,
-                                    over_relaxation, skip_unchanged, sweep, moved_in)
+        for j in range(limit.colored.shape[0]):
+            beyond += limit_element(limit, limit.colored[j], x, v, dt, sweep, moved_in)
         if beyond == 0:
             break
     sweeps[0] = sweep
