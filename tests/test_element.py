@@ -208,6 +208,33 @@ def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_s
         assert not np.array_equal(full, pull)
 
 
+def test_plastic_sweeps_in_one_launch_end_bit_for_bit_as_sweeps_launched_by_colour():
+    """On the CPU all of a plastic limit's sweeps run in one single-thread launch; over a
+    randomly pulled sheet, at both over-relaxations, that gives the velocities of one launch
+    per colour with a read of the count after each sweep, to the bit, in as many sweeps."""
+    from party.fabric import wool_flannel
+    from party.meshing import rectangular_net
+    from party.solvers.step_end import PLASTIC_OVER_RELAXATION, StepEnd
+
+    net = rectangular_net(0.2, 0.2, 0.02)
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
+    b.pin([0])
+    model = b.finalize("cpu")
+    pull = np.random.default_rng(3).normal(0.0, 30.0, (model.node_count, 3)).astype(np.float32)
+    for over_relaxation in (1.0, PLASTIC_OVER_RELAXATION):
+        runs = []
+        for serial in (True, False):
+            end = StepEnd(model, None, plastic_passes=200)
+            end._serial = serial
+            state = model.state()
+            state.node_qd.assign(pull)
+            runs.append((end._apply_plastic_limit(state, 1e-3, over_relaxation), state.velocities()))
+        (one_launch, fused), (by_colour, launched) = runs
+        assert one_launch == by_colour > 3
+        assert np.array_equal(fused, launched) and not np.array_equal(fused, pull)
+
+
 def test_elements_placed_beyond_their_limit_yield_to_the_placement():
     """A chain placed with its second element at 1.5 times rest (limit 1.1): that element's
     limit becomes its placed length and the others keep rest x 1.1; once yielded, nothing
