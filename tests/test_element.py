@@ -174,22 +174,20 @@ def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
     assert np.all(length <= limit * (1.0 + 2 * PLASTIC_TOLERANCE))
 
 
-@pytest.mark.parametrize("serial", [True, False])
-def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_sweeps(monkeypatch, serial):
-    """Sweeps after the first leave out elements whose nodes no correction has changed since
-    the last sweep began; over a randomly pulled sheet, at both over-relaxations, they must give
-    the velocities of sweeps over every element to the bit, in as many sweeps."""
+def pulled_sheet_sweeps(serial: bool, seed: int):
+    """A 20 cm wool sheet pinned at a corner, its nodes pulled at random (30 m/s); returns the
+    sheet's pull and a function giving (sweeps, velocities) of one plastic limit over it at an
+    over-relaxation, on the CPU in one launch (``serial``) or one launch per colour."""
     from party.fabric import wool_flannel
     from party.meshing import rectangular_net
-    from party.solvers import step_end
-    from party.solvers.step_end import PLASTIC_OVER_RELAXATION, StepEnd
+    from party.solvers.step_end import StepEnd
 
     net = rectangular_net(0.2, 0.2, 0.02)
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
     b.pin([0])
     model = b.finalize("cpu")
-    pull = np.random.default_rng(2).normal(0.0, 30.0, (model.node_count, 3)).astype(np.float32)
+    pull = np.random.default_rng(seed).normal(0.0, 30.0, (model.node_count, 3)).astype(np.float32)
 
     def sweep(over_relaxation: float) -> tuple[int, np.ndarray]:
         end = StepEnd(model, None, plastic_passes=200)
@@ -198,7 +196,18 @@ def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_s
         state.node_qd.assign(pull)
         return end._apply_plastic_limit(state, 1e-3, over_relaxation), state.velocities()
 
-    for over_relaxation in (1.0, PLASTIC_OVER_RELAXATION):
+    return pull, sweep
+
+
+@pytest.mark.parametrize("serial", [True, False])
+def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_sweeps(monkeypatch, serial):
+    """Sweeps after the first leave out elements whose nodes no correction has changed since
+    the last sweep began; over a randomly pulled sheet, at both over-relaxations, they must give
+    the velocities of sweeps over every element to the bit, in as many sweeps."""
+    from party.solvers import step_end
+
+    pull, sweep = pulled_sheet_sweeps(serial, seed=2)
+    for over_relaxation in (1.0, step_end.PLASTIC_OVER_RELAXATION):
         sweeps, skipping = sweep(over_relaxation)
         with monkeypatch.context() as patch:
             patch.setattr(step_end, "PLASTIC_SKIPS_UNCHANGED", False)
@@ -212,26 +221,13 @@ def test_plastic_sweeps_in_one_launch_end_bit_for_bit_as_sweeps_launched_by_colo
     """On the CPU all of a plastic limit's sweeps run in one single-thread launch; over a
     randomly pulled sheet, at both over-relaxations, that gives the velocities of one launch
     per colour with a read of the count after each sweep, to the bit, in as many sweeps."""
-    from party.fabric import wool_flannel
-    from party.meshing import rectangular_net
-    from party.solvers.step_end import PLASTIC_OVER_RELAXATION, StepEnd
+    from party.solvers.step_end import PLASTIC_OVER_RELAXATION
 
-    net = rectangular_net(0.2, 0.2, 0.02)
-    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
-    b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
-    b.pin([0])
-    model = b.finalize("cpu")
-    pull = np.random.default_rng(3).normal(0.0, 30.0, (model.node_count, 3)).astype(np.float32)
+    (pull, in_one_launch), (_, by_colour) = pulled_sheet_sweeps(True, seed=3), pulled_sheet_sweeps(False, seed=3)
     for over_relaxation in (1.0, PLASTIC_OVER_RELAXATION):
-        runs = []
-        for serial in (True, False):
-            end = StepEnd(model, None, plastic_passes=200)
-            end._serial = serial
-            state = model.state()
-            state.node_qd.assign(pull)
-            runs.append((end._apply_plastic_limit(state, 1e-3, over_relaxation), state.velocities()))
-        (one_launch, fused), (by_colour, launched) = runs
-        assert one_launch == by_colour > 3
+        one_launch_sweeps, fused = in_one_launch(over_relaxation)
+        colour_sweeps, launched = by_colour(over_relaxation)
+        assert one_launch_sweeps == colour_sweeps > 3
         assert np.array_equal(fused, launched) and not np.array_equal(fused, pull)
 
 
