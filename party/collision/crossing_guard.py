@@ -78,6 +78,19 @@ def _mark_crossing(e: int, i: int, k: int, t: int, tris: wp.array(dtype=int, ndi
         revert[tris[t, 2]] = 1
 
 
+@wp.func
+def _mark_through_box(e: int, i: int, k: int, mesh: wp.uint64, points: wp.array(dtype=wp.vec3),
+                      tris: wp.array(dtype=int, ndim=2), crossed_before: wp.array(dtype=int),
+                      crossed_now: wp.array(dtype=int), revert: wp.array(dtype=int), found: wp.array(dtype=int)):
+    """Test edge e (nodes i, k) against every triangle its box meets (``mesh`` refit at
+    ``points``) and mark it where it passes through one (:func:`_mark_crossing`)."""
+    query = wp.mesh_query_aabb(mesh, wp.min(points[i], points[k]), wp.max(points[i], points[k]))
+    t = int(0)
+    while wp.mesh_query_aabb_next(query, t):
+        if edge_pierces_triangle(i, k, t, points, tris):
+            _mark_crossing(e, i, k, t, tris, crossed_before, crossed_now, revert, found)
+
+
 @wp.kernel
 def _list_and_check_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp.vec3),
                           tris: wp.array(dtype=int, ndim=2), edges: wp.array(dtype=wp.vec2i), reach: float,
@@ -131,11 +144,7 @@ def _check_listed_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp.v
     k = edges[e][1]
     crossed_now[e] = 0
     if hot[i] != 0 or hot[k] != 0:
-        query = wp.mesh_query_aabb(mesh, wp.min(points[i], points[k]), wp.max(points[i], points[k]))
-        t = int(0)
-        while wp.mesh_query_aabb_next(query, t):
-            if edge_pierces_triangle(i, k, t, points, tris):
-                _mark_crossing(e, i, k, t, tris, crossed_before, crossed_now, revert, found)
+        _mark_through_box(e, i, k, mesh, points, tris, crossed_before, crossed_now, revert, found)
         return
     for j in range(wp.min(near_count[e], near.shape[1])):
         t = near[e, j]
@@ -156,11 +165,7 @@ def _recheck_edges(first: int, mesh: wp.uint64, points: wp.array(dtype=wp.vec3),
     if changed[i] == 0 and changed[k] == 0 and crossed_now[e] == 0:
         return
     crossed_now[e] = 0
-    query = wp.mesh_query_aabb(mesh, wp.min(points[i], points[k]), wp.max(points[i], points[k]))
-    t = int(0)
-    while wp.mesh_query_aabb_next(query, t):
-        if edge_pierces_triangle(i, k, t, points, tris):
-            _mark_crossing(e, i, k, t, tris, crossed_before, crossed_now, revert, found)
+    _mark_through_box(e, i, k, mesh, points, tris, crossed_before, crossed_now, revert, found)
 
 
 @wp.kernel
