@@ -84,9 +84,9 @@ class StepEnd:
         self._over_limit = wp.zeros(1, dtype=int, device=model.device)
         self._moved_in = wp.zeros(model.node_count, dtype=int, device=model.device)
         self._sweep_number = wp.zeros(1, dtype=int, device=model.device)
-        self._limits: dict[float, PlasticLimit] = {}
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = len(model.element_colored) > 0
+        self._limit = plastic_limit_of(model)
         self._serial = wp.get_device(model.device).is_cpu
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
         guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
@@ -134,37 +134,24 @@ class StepEnd:
         (some 15 us per launch, which made the plastic limit a third of a garment drape's time;
         and a large step of a garment at rest may take all the sweeps: GarmentCode's flare dress
         takes 32 in both limits of every step of its implicit drape, and one launch and read a
-        sweep had cost 0.85 ms of its 18 ms steps). Sweeps after the first leave out the elements whose nodes no
-        correction has changed since the last sweep began (:func:`limit_element`): the same
-        sweeps, bit for bit, over the few elements still at work. The nodes any correction
-        changed are non-zero in ``_moved_in``."""
+        sweep had cost 0.85 ms of its 18 ms steps). Sweeps after the first leave out the
+        elements whose nodes no correction has changed since the last sweep began
+        (:func:`limit_element`): the same sweeps, bit for bit, over the few elements still at
+        work. The nodes any correction changed are non-zero in ``_moved_in``."""
         m = self.model
-        limit = self._limits.get(float(over_relaxation)) or self._limit(over_relaxation)
         self._moved_in.zero_()
         if self._serial:
             launch(plastic_limit_sweeps, dim=1,
-                   inputs=[limit, state.node_q, state.node_qd, dt, int(self.plastic_passes), self._moved_in,
-                           self._sweep_number], device=m.device)
+                   inputs=[self._limit, state.node_q, state.node_qd, dt, float(over_relaxation),
+                           int(self.plastic_passes), self._moved_in, self._sweep_number], device=m.device)
             sweeps = int(self._sweep_number.numpy()[0])
         else:
-            sweeps = self._sweep_by_colour(limit, state, dt)
+            sweeps = self._sweep_by_colour(state, dt, over_relaxation)
         if self.max_speed is not None:
             launch(cap_speed, dim=m.node_count, inputs=[state.node_qd, float(self.max_speed)], device=m.device)
         return sweeps
 
-    def _limit(self, over_relaxation: float) -> PlasticLimit:
-        """The plastic limit's arrays and settings with ``over_relaxation`` (made once for each,
-        so that its launches are replayed)."""
-        m = self.model
-        limit = PlasticLimit()
-        limit.colored, limit.elem_nodes = m.element_colored, m.element_nodes
-        limit.max_length, limit.inv_mass = m.element_max_length, m.node_inv_mass
-        limit.tolerance, limit.over_relaxation = PLASTIC_TOLERANCE, float(over_relaxation)
-        limit.skip_unchanged = int(PLASTIC_SKIPS_UNCHANGED)
-        self._limits[float(over_relaxation)] = limit
-        return limit
-
-    def _sweep_by_colour(self, limit: PlasticLimit, state: State, dt: float) -> int:
+    def _sweep_by_colour(self, state: State, dt: float, over_relaxation: float) -> int:
         """The plastic limit's sweeps as one launch per colour (CUDA), reading the count of
         elements beyond after each sweep; returns the number of sweeps."""
         m = self.model
@@ -176,8 +163,17 @@ class StepEnd:
             launch(next_sweep, dim=1, inputs=[self._sweep_number, self._over_limit], device=m.device)
             for offset, count in zip(offsets[:-1], np.diff(offsets)):
                 launch(plastic_limit, dim=int(count),
-                       inputs=[limit, int(offset), state.node_q, state.node_qd, dt, self._sweep_number,
-                               self._moved_in, self._over_limit], device=m.device)
+                       inputs=[self._limit, int(offset), state.node_q, state.node_qd, dt, float(over_relaxation),
+                               self._sweep_number, self._moved_in, self._over_limit], device=m.device)
             if int(self._over_limit.numpy()[0]) == 0:
                 break
         return sweeps
+
+
+def plastic_limit_of(model: Model) -> PlasticLimit:
+    """The arrays and settings of ``model``'s plastic limit that every sweep reads."""
+    limit = PlasticLimit()
+    limit.colored, limit.elem_nodes = model.element_colored, model.element_nodes
+    limit.max_length, limit.inv_mass = model.element_max_length, model.node_inv_mass
+    limit.tolerance, limit.skip_unchanged = PLASTIC_TOLERANCE, int(PLASTIC_SKIPS_UNCHANGED)
+    return limit

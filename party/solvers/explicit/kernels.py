@@ -87,21 +87,20 @@ def end_of_step_span(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), i: 
 class PlasticLimit:
     """What every sweep of the plastic limit reads: the elements in colour order (``colored``,
     element ids), their nodes and longest lengths (1 + L_sh) l0 [m], the nodes' inverse masses
-    [1/kg], the relative ``tolerance`` beyond the limit that counts, ``over_relaxation`` and
-    ``skip_unchanged`` (see :func:`limit_element`)."""
+    [1/kg], the relative ``tolerance`` beyond the limit that counts, and ``skip_unchanged``
+    (see :func:`limit_element`)."""
 
     colored: wp.array(dtype=int)
     elem_nodes: wp.array(dtype=wp.vec2i)
     max_length: wp.array(dtype=float)
     inv_mass: wp.array(dtype=float)
     tolerance: float
-    over_relaxation: float
     skip_unchanged: int
 
 
 @wp.func
 def limit_element(limit: PlasticLimit, e: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
-                  sweep: int, moved_in: wp.array(dtype=int)) -> int:
+                  over_relaxation: float, sweep: int, moved_in: wp.array(dtype=int)) -> int:
     """f_plas (section 5, figure 5) on element e: an element may not stretch beyond
     (1 + L_sh) l0.
 
@@ -135,7 +134,7 @@ def limit_element(limit: PlasticLimit, e: int, x: wp.array(dtype=wp.vec3), v: wp
     if length > longest * (1.0 + limit.tolerance):
         beyond = 1
     direction = p / length
-    excess = limit.over_relaxation * (length - longest) / (dt * (wi + wk))
+    excess = over_relaxation * (length - longest) / (dt * (wi + wk))
     v[i] = v[i] + direction * (excess * wi)
     v[k] = v[k] - direction * (excess * wk)
     if wi > 0.0:
@@ -147,19 +146,21 @@ def limit_element(limit: PlasticLimit, e: int, x: wp.array(dtype=wp.vec3), v: wp
 
 @wp.kernel
 def plastic_limit(limit: PlasticLimit, offset: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
-                  dt: float, sweep_number: wp.array(dtype=int), moved_in: wp.array(dtype=int),
+                  dt: float, over_relaxation: float, sweep_number: wp.array(dtype=int), moved_in: wp.array(dtype=int),
                   over: wp.array(dtype=int)):
     """One colour's share of a sweep of the plastic limit (:func:`limit_element`), in the sweep
     ``sweep_number[0]``. Elements of one colour share no node, so a colour is processed in
     parallel; colours run one after another. ``over`` counts the elements found beyond (1 +
     ``tolerance``) times their limit."""
-    if limit_element(limit, limit.colored[offset + wp.tid()], x, v, dt, sweep_number[0], moved_in) != 0:
+    if limit_element(limit, limit.colored[offset + wp.tid()], x, v, dt, over_relaxation, sweep_number[0],
+                     moved_in) != 0:
         wp.atomic_add(over, 0, 1)
 
 
 @wp.kernel
 def plastic_limit_sweeps(limit: PlasticLimit, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
-                         max_sweeps: int, moved_in: wp.array(dtype=int), sweeps: wp.array(dtype=int)):
+                         over_relaxation: float, max_sweeps: int, moved_in: wp.array(dtype=int),
+                         sweeps: wp.array(dtype=int)):
     """Every sweep of the plastic limit in one thread (the CPU's serial launch): sweeps over
     all elements in colour order until one finds none beyond (1 + ``tolerance``) times its
     limit, at most ``max_sweeps``; the number taken goes to ``sweeps[0]``. The same sweeps as
@@ -169,7 +170,7 @@ def plastic_limit_sweeps(limit: PlasticLimit, x: wp.array(dtype=wp.vec3), v: wp.
         sweep += 1
         beyond = int(0)
         for j in range(limit.colored.shape[0]):
-            beyond += limit_element(limit, limit.colored[j], x, v, dt, sweep, moved_in)
+            beyond += limit_element(limit, limit.colored[j], x, v, dt, over_relaxation, sweep, moved_in)
         if beyond == 0:
             break
     sweeps[0] = sweep
