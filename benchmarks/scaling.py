@@ -10,10 +10,12 @@ shared 2-core machine differed by up to a third at one size), the cost per doubl
 linear growth (1.0 = linear) between neighbouring sizes, and over the whole range the
 exponent p of a least-squares fit ms ~ nodes^p, as its cost per doubling 2^(p - 1).
 The square is 1 m across, so more nodes mean a finer net, or with ``--spacing`` its nodes are
-that far apart and the square grows. In the 1 m square with self-collision, a net finer than
-about 4 mm (64k nodes and more) finds more cloth triangles within the collision thickness
-(3 mm) plus search margin of each node than a node keeps (48), and each step costs more per
-node; at a fixed spacing the cost per node stays the same.
+that far apart and the square grows. In the 1 m square a finer net is stiffer for its inertia
+(a node's K dt^2 / m grows as 1 / spacing^2), and from 64k nodes (4 mm) the implicit solver takes
+more sweeps a step than its 10 (``STIFFNESS_PER_SWEEP`` in ``party.solvers.implicit.solver``;
+printed per size); with self-collision each node's search also meets more triangles of its own
+layer within the thickness (3 mm) plus margin. At a fixed spacing the cost per node stays the
+same. ``benchmarks/step_profile.py square --nodes N`` shows where one size's step goes.
 """
 
 from __future__ import annotations
@@ -28,30 +30,41 @@ from party.body import sphere
 from party.collision import CollisionSettings
 from party.fabric import fabric_by_name
 from party.meshing import rectangular_net
-from party.model import ModelBuilder
+from party.model import Model, ModelBuilder
+from party.solvers.implicit import SolverImplicit
 from party.solvers.select import DEFAULT_DT, make_solver
 
 
-def step_ms(nodes: int, steps: int, self_collision: bool, spacing: float | None = None) -> tuple[int, float]:
+def square_on_sphere(nodes: int, self_collision: bool, spacing: float | None = None,
+                     device: str | None = None) -> tuple[Model, SolverImplicit, float]:
+    """A square of cotton of about ``nodes`` nodes (1 m across, or ``spacing`` [m] between
+    nodes) lying just above the sphere of ``party run sphere-drop``: the model, the implicit
+    solver and its time step [s]."""
     side = int(round(np.sqrt(nodes)))
     size = 1.0 if spacing is None else spacing * (side - 1)
     net = rectangular_net(size, size, size / (side - 1))
     builder = ModelBuilder()
     builder.add_cloth(net, fabric_by_name("cotton"), np.c_[net.uv - 0.5 * size, np.full(net.node_count, 0.305)])
     builder.add_collider(sphere(0.3, subdivisions=4))
-    model = builder.finalize()
+    model = builder.finalize(device)
     solver = make_solver("implicit", model, collision=CollisionSettings(cloth=self_collision))
+    return model, solver, DEFAULT_DT["implicit"]
+
+
+def step_ms(nodes: int, steps: int, self_collision: bool, spacing: float | None = None) -> tuple[int, int, float]:
+    """Node count, sweeps a step and milliseconds a step of :func:`square_on_sphere`."""
+    model, solver, dt = square_on_sphere(nodes, self_collision, spacing)
     state, scratch, control = model.state(), model.state(), model.control()
     for _ in range(5):
-        solver.step(state, scratch, control, DEFAULT_DT["implicit"])
+        solver.step(state, scratch, control, dt)
         state, scratch = scratch, state
     wp.synchronize()
     start = time.perf_counter()
     for _ in range(steps):
-        solver.step(state, scratch, control, DEFAULT_DT["implicit"])
+        solver.step(state, scratch, control, dt)
         state, scratch = scratch, state
     wp.synchronize()
-    return model.node_count, 1000.0 * (time.perf_counter() - start) / steps
+    return model.node_count, solver.sweeps(dt), 1000.0 * (time.perf_counter() - start) / steps
 
 
 def main() -> None:
@@ -65,17 +78,18 @@ def main() -> None:
     args = parser.parse_args()
     if args.repeats < 1 or args.steps < 1:
         parser.error(f"--repeats and --steps must be at least 1, got {args.repeats} and {args.steps}")
-    rows = []
+    rows, sweeps = [], []
     for n in args.sizes:
         runs = [step_ms(n, args.steps, args.self_collision, args.spacing) for _ in range(args.repeats)]
-        rows.append((runs[0][0], min(ms for _, ms in runs)))
-    print(f"{'nodes':>8} {'ms/step':>9} {'per doubling vs linear':>24}")
+        rows.append((runs[0][0], min(ms for _, _, ms in runs)))
+        sweeps.append(runs[0][1])
+    print(f"{'nodes':>8} {'sweeps':>6} {'ms/step':>9} {'per doubling vs linear':>24}")
     for k, (n, ms) in enumerate(rows):
         growth = ""
         if k:
             n0, ms0 = rows[k - 1]
             growth = f"{(ms / ms0) ** (np.log(2) / np.log(n / n0)) / 2.0:.2f}"
-        print(f"{n:>8} {ms:>9.2f} {growth:>24}")
+        print(f"{n:>8} {sweeps[k]:>6} {ms:>9.2f} {growth:>24}")
     if len(rows) > 1:
         nodes, ms = np.log(np.array(rows, dtype=float)).T
         exponent = np.polyfit(nodes, ms, 1)[0]

@@ -1,0 +1,210 @@
+"""Where a step's time goes: wall time per kernel of party's steps, in three workloads.
+
+    python benchmarks/step_profile.py sphere-drop [--grid 100] [--self-collision on|off] [--seconds 1]
+                                             [--dt S] [--solver implicit|explicit]
+    python benchmarks/step_profile.py square [--nodes 100000] [--steps 10] [--self-collision on|off]
+    python benchmarks/step_profile.py drape [--garment reference|flare] [--solver implicit|explicit]
+
+``sphere-drop`` is ``party run sphere-drop`` without output; ``square`` is the cloth of
+``benchmarks/scaling.py`` (a 1 m square resting on the sphere) at one size; ``drape`` drapes
+the reference dress on dress form M, or GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj``
+(from ``../shared/``), in wool flannel at 20 mm, as ``benchmarks/compare.py`` does, and splits
+its time into sewing and draping.
+
+Prints the steps' wall milliseconds per step, and per kernel its milliseconds per step,
+launches per step and share of the steps' time, largest first. Every launch that party makes
+through :mod:`party.launch` is timed (a CPU launch returns when its kernel has run) and the
+implicit solve replayed as a recorded graph counts as one entry; the rest of a step (host
+work between launches) is the last line. The first steps (compilation, the first search) are
+left out. Timing every launch costs a few percent.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from collections import Counter
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Callable, Iterator
+
+import warp as wp
+
+import party.launch
+from party.scenes import sphere_drop
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "garmentcode"
+WARM_UP_STEPS = 3
+GRAPH = "(implicit solve, replayed graph)"
+LAUNCHERS = ("launch", "launch_items", "launch_workers")
+
+
+class KernelClock:
+    """Wall seconds and launches per kernel while :meth:`running` (host-synchronous CPU
+    launches; on CUDA a launch only queues its kernel, so use this on the CPU)."""
+
+    def __init__(self) -> None:
+        self.seconds: Counter[str] = Counter()
+        self.launches: Counter[str] = Counter()
+        self.on = False
+
+    def _timed(self, run: Callable, name: Callable) -> Callable:
+        def timed(*args, **kwargs):
+            if not self.on:
+                return run(*args, **kwargs)
+            started = time.perf_counter()
+            try:
+                return run(*args, **kwargs)
+            finally:
+                key = name(args)
+                self.seconds[key] += time.perf_counter() - started
+                self.launches[key] += 1
+        return timed
+
+    @contextmanager
+    def installed(self) -> Iterator["KernelClock"]:
+        """Route party's launches (the names its modules imported from :mod:`party.launch`) and
+        Warp's graph replays through the clock; restored on exit."""
+        swapped = []
+        kernel_name = lambda args: getattr(args[0], "key", str(args[0]))  # noqa: E731
+        for launcher in LAUNCHERS:
+            original = getattr(party.launch, launcher)
+            timed = self._timed(original, kernel_name)
+            for name, module in list(sys.modules.items()):
+                if (name.startswith("party.") and module is not party.launch
+                        and getattr(module, launcher, None) is original):
+                    swapped.append((module, launcher, original))
+                    setattr(module, launcher, timed)
+        swapped.append((wp, "capture_launch", wp.capture_launch))
+        wp.capture_launch = self._timed(wp.capture_launch, lambda args: GRAPH)
+        try:
+            yield self
+        finally:
+            for module, name, original in reversed(swapped):
+                setattr(module, name, original)
+
+    @contextmanager
+    def running(self) -> Iterator[None]:
+        self.on = True
+        try:
+            yield
+        finally:
+            self.on = False
+
+    def report(self, wall: float, steps: int) -> None:
+        """Print the kernels' share of ``wall`` [s] over ``steps`` steps."""
+        print(f"{steps} steps, {1000.0 * wall / steps:.2f} ms a step")
+        print(f"{'ms/step':>9} {'launches/step':>14} {'share':>6}  kernel")
+        for key, seconds in self.seconds.most_common():
+            print(f"{1000.0 * seconds / steps:9.3f} {self.launches[key] / steps:14.2f} {seconds / wall:6.1%}  {key}")
+        host = wall - sum(self.seconds.values())
+        print(f"{1000.0 * host / steps:9.3f} {'':>14} {host / wall:6.1%}  (host, between launches)")
+
+
+def run_steps(model, solver, dt: float, steps: int, clock: KernelClock) -> None:
+    """``steps`` steps of ``solver`` from ``model``'s initial state after the warm-up, timed."""
+    state, scratch, control = model.state(), model.state(), model.control()
+    for _ in range(WARM_UP_STEPS):
+        solver.step(state, scratch, control, dt)
+        state, scratch = scratch, state
+    with clock.installed(), clock.running():
+        started = time.perf_counter()
+        for _ in range(steps):
+            solver.step(state, scratch, control, dt)
+            state, scratch = scratch, state
+        wall = time.perf_counter() - started
+    describe(solver, dt)
+    clock.report(wall, steps)
+
+
+def describe(solver, dt: float) -> None:
+    if hasattr(solver, "sweeps"):
+        print(f"implicit solver: {solver.sweeps(dt)} sweeps a step of {dt:.6g} s over {len(solver.color_offsets) - 1} "
+              f"colours, {solver.workers} worker thread(s)")
+
+
+def profile_sphere_drop(args: argparse.Namespace) -> None:
+    scene = sphere_drop.build(grid=args.grid, self_collision=args.self_collision == "on", solver=args.solver,
+                              duration=args.seconds, dt=args.dt, device="cpu")
+    steps = max(1, round(scene.duration / scene.dt) - WARM_UP_STEPS)
+    print(f"sphere drop, {args.grid}x{args.grid} nodes, self-collision {args.self_collision}, {args.solver} solver")
+    run_steps(scene.model, scene.solver, scene.dt, steps, KernelClock())
+
+
+def profile_square(args: argparse.Namespace) -> None:
+    from scaling import square_on_sphere
+
+    model, solver, dt = square_on_sphere(args.nodes, args.self_collision == "on", device="cpu")
+    print(f"1 m square on the sphere, {model.node_count} nodes, self-collision {args.self_collision}")
+    run_steps(model, solver, dt, args.steps, KernelClock())
+    overflow = solver.collision.candidate_overflow() if solver.collision is not None else 0
+    print(f"candidates dropped for want of room: {overflow}")
+
+
+def profile_drape(args: argparse.Namespace) -> None:
+    import party.scenes.drape as drape_scene
+    from party.fabric import wool_flannel
+    from party.scenes.dress import pattern_path
+
+    if args.garment == "reference":
+        pattern, body = pattern_path(), "M"
+    else:
+        pattern, body = SHARED / "patterns" / "dress_sleeves_flare_specification.json", SHARED / "bodies" / "mean_all.obj"
+        if not pattern.exists():
+            raise SystemExit(f"GarmentCode's flare dress is not at {pattern}")
+    clock = KernelClock()
+    drape_phase = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
+    inner = getattr(drape_scene, drape_phase)
+    phase = {}
+
+    def draping(*a, **k):
+        started = time.perf_counter()
+        with clock.running():
+            try:
+                return inner(*a, **k)
+            finally:
+                phase["wall"] = time.perf_counter() - started
+
+    with clock.installed(), tempfile.TemporaryDirectory() as tmp:
+        setattr(drape_scene, drape_phase, draping)
+        try:
+            summary = drape_scene.drape(pattern, str(body), wool_flannel(), Path(tmp) / "drape", spacing=0.02,
+                                        images=False, progress=False, solver=args.solver, device="cpu")
+        finally:
+            setattr(drape_scene, drape_phase, inner)
+    relaxation = summary["relaxation"]
+    steps = max(relaxation["draping_steps"], 1)
+    print(f"{args.garment} dress, {summary['nodes']} nodes, {args.solver} solver: {summary['wall_seconds']:.1f} s in all, "
+          f"draping {phase['wall']:.1f} s (the rest is sewing, set-up and output); at rest {relaxation['at_rest']}, "
+          f"{summary['body_penetrations']} penetrations, {summary['cloth_crossings']} crossings, "
+          f"{summary['body_vertices_through_cloth']} body vertices through the cloth")
+    print("draping steps:")
+    clock.report(phase["wall"], steps)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    workloads = parser.add_subparsers(dest="workload", required=True)
+    drop = workloads.add_parser("sphere-drop", help="party run sphere-drop's steps")
+    drop.add_argument("--grid", type=int, default=100)
+    drop.add_argument("--self-collision", choices=("on", "off"), default="on")
+    drop.add_argument("--seconds", type=float, default=1.0)
+    drop.add_argument("--dt", type=float, default=None, help="time step [s] (default: the solver's)")
+    drop.add_argument("--solver", choices=("implicit", "explicit"), default="implicit")
+    square = workloads.add_parser("square", help="benchmarks/scaling.py's square at one size")
+    square.add_argument("--nodes", type=int, default=100_000)
+    square.add_argument("--steps", type=int, default=10)
+    square.add_argument("--self-collision", choices=("on", "off"), default="on")
+    drape = workloads.add_parser("drape", help="a garment draped to rest, as benchmarks/compare.py does")
+    drape.add_argument("--garment", choices=("reference", "flare"), default="reference")
+    drape.add_argument("--solver", choices=("implicit", "explicit"), default="implicit")
+    args = parser.parse_args()
+    if getattr(args, "steps", 1) < 1 or getattr(args, "seconds", 1.0) <= 0:
+        parser.error("--steps and --seconds must be positive")
+    {"sphere-drop": profile_sphere_drop, "square": profile_square, "drape": profile_drape}[args.workload](args)
+
+
+if __name__ == "__main__":
+    main()
