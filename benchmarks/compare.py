@@ -177,7 +177,7 @@ def run_drape(pattern: Path, body: str, solver: str) -> dict:
         summary = drape(pattern, body, wool_flannel(), Path(tmp) / "drape", spacing=0.02, images=False,
                         progress=False, solver=solver)
     return {"wall_seconds_to_rest": summary["wall_seconds"], "at_rest": summary["relaxation"]["at_rest"],
-            "nodes": summary["nodes"],
+            "nodes": summary["nodes"], "draping_steps": summary["relaxation"]["draping_steps"],
             "max_seam_gap_mm": summary["max_seam_gap_mm"], "body_penetrations": summary["body_penetrations"],
             "body_vertices_through_cloth": summary["body_vertices_through_cloth"],
             "cloth_crossings": summary["cloth_crossings"], "max_elongation": summary["max_elongation"],

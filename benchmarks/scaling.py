@@ -35,8 +35,8 @@ from party.solvers.implicit import SolverImplicit
 from party.solvers.select import DEFAULT_DT, make_solver
 
 
-def square_on_sphere(nodes: int, self_collision: bool, spacing: float | None = None,
-                     device: str | None = None) -> tuple[Model, SolverImplicit, float]:
+def square_on_sphere(nodes: int, self_collision: bool,
+                     spacing: float | None = None) -> tuple[Model, SolverImplicit, float]:
     """A square of cotton of about ``nodes`` nodes (1 m across, or ``spacing`` [m] between
     nodes) lying just above the sphere of ``party run sphere-drop``: the model, the implicit
     solver and its time step [s]."""
@@ -46,7 +46,7 @@ def square_on_sphere(nodes: int, self_collision: bool, spacing: float | None = N
     builder = ModelBuilder()
     builder.add_cloth(net, fabric_by_name("cotton"), np.c_[net.uv - 0.5 * size, np.full(net.node_count, 0.305)])
     builder.add_collider(sphere(0.3, subdivisions=4))
-    model = builder.finalize(device)
+    model = builder.finalize()
     solver = make_solver("implicit", model, collision=CollisionSettings(cloth=self_collision))
     return model, solver, DEFAULT_DT["implicit"]
 

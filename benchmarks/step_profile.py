@@ -15,27 +15,30 @@ Prints the steps' wall milliseconds per step, and per kernel its milliseconds pe
 launches per step and share of the steps' time, largest first. Every launch that party makes
 through :mod:`party.launch` is timed (a CPU launch returns when its kernel has run) and the
 implicit solve replayed as a recorded graph counts as one entry; the rest of a step (host
-work between launches) is the last line. The first steps (compilation, the first search) are
-left out. Timing every launch costs a few percent.
+work between launches) is the last line. The sphere drop and the square leave out their first
+steps (compilation, the first search). Timing every launch costs a few percent. Run it as a
+script (it imports ``scaling.py`` and ``compare.py`` from beside it) on an otherwise idle
+machine: the implicit solver's worker threads spin while they wait for each other, and a core
+taken by another process stretches the sweeps several times over.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
-import tempfile
 import time
 from collections import Counter
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Callable, Iterator
 
-import warp as wp
+os.environ["PARTY_DEVICE"] = "cpu"  # a CUDA launch returns before its kernel has run: only the CPU is timed
 
-import party.launch
-from party.scenes import sphere_drop
+import warp as wp  # noqa: E402
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "garmentcode"
+import party.launch  # noqa: E402
+from party.scenes import sphere_drop  # noqa: E402
+
 WARM_UP_STEPS = 3
 GRAPH = "(implicit solve, replayed graph)"
 LAUNCHERS = ("launch", "launch_items", "launch_workers")
@@ -68,10 +71,9 @@ class KernelClock:
         """Route party's launches (the names its modules imported from :mod:`party.launch`) and
         Warp's graph replays through the clock; restored on exit."""
         swapped = []
-        kernel_name = lambda args: getattr(args[0], "key", str(args[0]))  # noqa: E731
         for launcher in LAUNCHERS:
             original = getattr(party.launch, launcher)
-            timed = self._timed(original, kernel_name)
+            timed = self._timed(original, _kernel_name)
             for name, module in list(sys.modules.items()):
                 if (name.startswith("party.") and module is not party.launch
                         and getattr(module, launcher, None) is original):
@@ -103,6 +105,11 @@ class KernelClock:
         print(f"{1000.0 * host / steps:9.3f} {'':>14} {host / wall:6.1%}  (host, between launches)")
 
 
+def _kernel_name(args: tuple) -> str:
+    """The kernel of a launch's arguments (the first)."""
+    return getattr(args[0], "key", str(args[0]))
+
+
 def run_steps(model, solver, dt: float, steps: int, clock: KernelClock) -> None:
     """``steps`` steps of ``solver`` from ``model``'s initial state after the warm-up, timed."""
     state, scratch, control = model.state(), model.state(), model.control()
@@ -120,6 +127,7 @@ def run_steps(model, solver, dt: float, steps: int, clock: KernelClock) -> None:
 
 
 def describe(solver, dt: float) -> None:
+    """Print the implicit solver's sweeps, colours and worker threads for steps of ``dt`` [s]."""
     if hasattr(solver, "sweeps"):
         print(f"implicit solver: {solver.sweeps(dt)} sweeps a step of {dt:.6g} s over {len(solver.color_offsets) - 1} "
               f"colours, {solver.workers} worker thread(s)")
@@ -127,7 +135,7 @@ def describe(solver, dt: float) -> None:
 
 def profile_sphere_drop(args: argparse.Namespace) -> None:
     scene = sphere_drop.build(grid=args.grid, self_collision=args.self_collision == "on", solver=args.solver,
-                              duration=args.seconds, dt=args.dt, device="cpu")
+                              duration=args.seconds, dt=args.dt)
     steps = max(1, round(scene.duration / scene.dt) - WARM_UP_STEPS)
     print(f"sphere drop, {args.grid}x{args.grid} nodes, self-collision {args.self_collision}, {args.solver} solver")
     run_steps(scene.model, scene.solver, scene.dt, steps, KernelClock())
@@ -136,7 +144,7 @@ def profile_sphere_drop(args: argparse.Namespace) -> None:
 def profile_square(args: argparse.Namespace) -> None:
     from scaling import square_on_sphere
 
-    model, solver, dt = square_on_sphere(args.nodes, args.self_collision == "on", device="cpu")
+    model, solver, dt = square_on_sphere(args.nodes, args.self_collision == "on")
     print(f"1 m square on the sphere, {model.node_count} nodes, self-collision {args.self_collision}")
     run_steps(model, solver, dt, args.steps, KernelClock())
     overflow = solver.collision.candidate_overflow() if solver.collision is not None else 0
@@ -145,43 +153,38 @@ def profile_square(args: argparse.Namespace) -> None:
 
 def profile_drape(args: argparse.Namespace) -> None:
     import party.scenes.drape as drape_scene
-    from party.fabric import wool_flannel
-    from party.scenes.dress import pattern_path
+    from compare import garment_scenes, run_drape
 
-    if args.garment == "reference":
-        pattern, body = pattern_path(), "M"
-    else:
-        pattern, body = SHARED / "patterns" / "dress_sleeves_flare_specification.json", SHARED / "bodies" / "mean_all.obj"
-        if not pattern.exists():
-            raise SystemExit(f"GarmentCode's flare dress is not at {pattern}")
+    scenes = {label.split()[0].lower(): (label, pattern, body) for label, pattern, body in garment_scenes()}
+    key = "garmentcode" if args.garment == "flare" else "reference"
+    if key not in scenes:
+        raise SystemExit("GarmentCode's flare dress is not in ../shared/data/garmentcode/")
+    label, pattern, body = scenes[key]
     clock = KernelClock()
-    drape_phase = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
-    inner = getattr(drape_scene, drape_phase)
-    phase = {}
+    phase_name = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
+    phase = getattr(drape_scene, phase_name)
+    wall = {}
 
     def draping(*a, **k):
         started = time.perf_counter()
         with clock.running():
             try:
-                return inner(*a, **k)
+                return phase(*a, **k)
             finally:
-                phase["wall"] = time.perf_counter() - started
+                wall["draping"] = time.perf_counter() - started
 
-    with clock.installed(), tempfile.TemporaryDirectory() as tmp:
-        setattr(drape_scene, drape_phase, draping)
-        try:
-            summary = drape_scene.drape(pattern, str(body), wool_flannel(), Path(tmp) / "drape", spacing=0.02,
-                                        images=False, progress=False, solver=args.solver, device="cpu")
-        finally:
-            setattr(drape_scene, drape_phase, inner)
-    relaxation = summary["relaxation"]
-    steps = max(relaxation["draping_steps"], 1)
-    print(f"{args.garment} dress, {summary['nodes']} nodes, {args.solver} solver: {summary['wall_seconds']:.1f} s in all, "
-          f"draping {phase['wall']:.1f} s (the rest is sewing, set-up and output); at rest {relaxation['at_rest']}, "
-          f"{summary['body_penetrations']} penetrations, {summary['cloth_crossings']} crossings, "
-          f"{summary['body_vertices_through_cloth']} body vertices through the cloth")
+    setattr(drape_scene, phase_name, draping)
+    try:
+        with clock.installed():
+            row = run_drape(pattern, body, args.solver)
+    finally:
+        setattr(drape_scene, phase_name, phase)
+    print(f"{label}, {row['nodes']} nodes, {args.solver} solver: {row['wall_seconds_to_rest']:.1f} s in all, "
+          f"draping {wall['draping']:.1f} s (the rest is sewing, set-up and output); at rest {row['at_rest']}, "
+          f"{row['body_penetrations']} penetrations, {row['cloth_crossings']} crossings, "
+          f"{row['body_vertices_through_cloth']} body vertices through the cloth")
     print("draping steps:")
-    clock.report(phase["wall"], steps)
+    clock.report(wall["draping"], max(row["draping_steps"], 1))
 
 
 def main() -> None:
