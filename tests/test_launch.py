@@ -96,7 +96,7 @@ def test_recorded_launches_are_bounded(monkeypatch):
 
 
 @wp.kernel
-def _pass_around(worker: int, workers: int, sync: wp.array(dtype=int), max_spins: int, rounds: int,
+def _pass_around(worker: int, workers: int, sync: launch.WorkerSync, rounds: int,
                  even: wp.array(dtype=float), odd: wp.array(dtype=float)):
     """Each round, every worker fills its share of one array from values of the other array
     that other workers wrote in the round before."""
@@ -109,13 +109,25 @@ def _pass_around(worker: int, workers: int, sync: wp.array(dtype=int), max_spins
             target = even
         for i in range(n * worker // workers, n * (worker + 1) // workers):
             target[i] = 0.5 * source[(i + n // 2) % n] + source[(i + 1) % n] * 0.25 + float(i % 7)
-        launch.worker_barrier(sync, workers, max_spins)
+        launch.worker_barrier(sync, workers)
 
 
 @wp.kernel
-def _one_stays_away(worker: int, workers: int, sync: wp.array(dtype=int), max_spins: int):
+def _one_stays_away(worker: int, workers: int, sync: launch.WorkerSync):
     if worker == 0:
-        launch.worker_barrier(sync, workers, max_spins)
+        launch.worker_barrier(sync, workers)
+
+
+@wp.kernel
+def _one_arrives_late(worker: int, workers: int, sync: launch.WorkerSync, work: int, out: wp.array(dtype=float)):
+    """Worker 1 computes for a while before it meets worker 0 at the barrier."""
+    if worker == 1:
+        x = float(1.0)
+        for _ in range(work):
+            x = x * 0.9999999 + 1.0e-7
+        out[0] = x
+    launch.worker_barrier(sync, workers)
+    out[worker + 1] = 1.0
 
 
 def test_workers_meeting_at_barriers_give_what_one_worker_gives():
@@ -125,17 +137,32 @@ def test_workers_meeting_at_barriers_give_what_one_worker_gives():
     for workers in (1, 3):
         even = wp.array(np.arange(3001, dtype=np.float32), dtype=float, device="cpu")
         odd = wp.zeros(3001, dtype=float, device="cpu")
-        sync = wp.zeros(3, dtype=int, device="cpu")
+        sync = launch.worker_sync("cpu")
         launch.launch_workers(_pass_around, workers, sync, [200, even, odd], "cpu")
         results.append(even.numpy())
-        assert sync.numpy().tolist()[0::2] == [0, 0]
+        assert sync.counters.numpy().tolist()[0:3:2] == [0, 0]
     assert np.array_equal(results[0], results[1])
 
 
 def test_a_worker_that_never_arrives_is_an_error_not_a_hang(monkeypatch):
     monkeypatch.setattr(launch, "WORKER_SPINS", 10000)
-    sync = wp.zeros(3, dtype=int, device="cpu")
+    sync = launch.worker_sync("cpu")
     with pytest.raises(WorkersLost, match="^_one_stays_away: a worker thread waited 10000 spins for the others; "
                                           "rerun with PARTY_THREADS=1$"):
         launch.launch_workers(_one_stays_away, 2, sync, [], "cpu")
-    assert sync.numpy().tolist() == [0, 0, 0]
+    assert sync.counters.numpy().tolist()[:3] == [0, 0, 0]
+
+
+@pytest.mark.skipif(launch._SCHED_YIELD == 0, reason="this platform's C library has no sched_yield")
+def test_a_worker_waiting_long_gives_its_core_away():
+    """Worker 0 waits at the barrier while worker 1 computes (some millions of steps, far beyond
+    YIELD_AFTER_SPINS pauses): it yields its core instead of spinning, and both pass the barrier
+    once worker 1 arrives. (Beside a busy process on two cores a spinning worker held the core
+    its partner needed, and the sweeps took 11 times as long.)"""
+    sync = launch.worker_sync("cpu")
+    out = wp.zeros(3, dtype=float, device="cpu")
+    launch.launch_workers(_one_arrives_late, 2, sync, [5_000_000, out], "cpu")
+    arrivals, generation, failed, yields = sync.counters.numpy().tolist()
+    assert (arrivals, generation, failed) == (0, 1, 0)
+    assert yields > 0
+    assert out.numpy()[1:].tolist() == [1.0, 1.0]

@@ -3,7 +3,7 @@ potential (Chen, Macklin, Macklin, Yuksel, Kim: "Vertex Block Descent", SIGGRAPH
 
 import warp as wp
 
-from ...launch import worker_barrier
+from ...launch import WorkerSync, worker_barrier
 from ..hysteresis import slider_moment
 
 
@@ -225,7 +225,7 @@ def block_descent(first: int, colored: wp.array(dtype=int), terms: DescentTerms,
 
 
 @wp.kernel
-def sweep_workers(worker: int, workers: int, sync: wp.array(dtype=int), max_spins: int, iterations: int,
+def sweep_workers(worker: int, workers: int, sync: WorkerSync, iterations: int,
                   color_offsets: wp.array(dtype=int), omegas: wp.array(dtype=float), colored: wp.array(dtype=int),
                   terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float, disp: wp.array(dtype=wp.vec3),
                   disp_previous: wp.array(dtype=wp.vec3), disp_before: wp.array(dtype=wp.vec3)):
@@ -240,7 +240,7 @@ def sweep_workers(worker: int, workers: int, sync: wp.array(dtype=int), max_spin
             count = color_offsets[c + 1] - first
             for j in range(first + count * worker // workers, first + count * (worker + 1) // workers):
                 descend_node(colored[j], terms, x_start, dt, disp)
-            worker_barrier(sync, workers, max_spins)
+            worker_barrier(sync, workers)
         if omegas.shape[0] > 0:
             n = disp.shape[0]
             for i in range(n * worker // workers, n * (worker + 1) // workers):
@@ -248,7 +248,7 @@ def sweep_workers(worker: int, workers: int, sync: wp.array(dtype=int), max_spin
                     disp_previous[i] = disp[i]
                 else:
                     blend_node(i, disp, disp_previous, disp_before, omegas[iteration])
-            worker_barrier(sync, workers, max_spins)
+            worker_barrier(sync, workers)
 
 
 @wp.kernel

@@ -10,7 +10,7 @@ import warp as wp
 
 from ...collision import CollisionSettings
 from ...errors import InvalidInput
-from ...launch import launch, launch_workers, worker_count
+from ...launch import launch, launch_workers, worker_count, worker_sync
 from ...model import Control, Model, State
 from ...model.csr import csr_order
 from ..aero import Air, AirForces
@@ -130,7 +130,7 @@ class SolverImplicit:
         self._colored = wp.array(colored, dtype=int, device=dev)
         self._color_offsets = wp.array(color_offsets, dtype=int, device=dev)
         self._omegas_by_dt: dict[float, tuple[np.ndarray, wp.array]] = {}
-        self._sync = wp.zeros(3, dtype=int, device=dev)
+        self._sync = worker_sync(dev)
         self.workers = worker_count(len(colored), dev)
         self._terms = self._descent_terms()
         self._graphs: dict = {}
