@@ -118,16 +118,30 @@ def _one_stays_away(worker: int, workers: int, sync: launch.WorkerSync):
         launch.worker_barrier(sync, workers)
 
 
+@wp.func_native("""
+#if !defined(__CUDA_ARCH__)
+return __atomic_load_n((int*)a.data + i, __ATOMIC_ACQUIRE);
+#else
+return a[i];
+#endif
+""")
+def _read_now(a: wp.array(dtype=int), i: int) -> int:
+    """``a[i]`` as another thread last wrote it (a load the compiler may not hoist out of a loop)."""
+    ...
+
+
 @wp.kernel
-def _one_arrives_late(worker: int, workers: int, sync: launch.WorkerSync, work: int, out: wp.array(dtype=float)):
-    """Worker 1 computes for a while before it meets worker 0 at the barrier."""
+def _one_arrives_late(worker: int, workers: int, sync: launch.WorkerSync, most_reads: int,
+                      out: wp.array(dtype=int)):
+    """Worker 1 meets worker 0 at the barrier only once worker 0, waiting there, has given its
+    core away (or after ``most_reads`` looks)."""
     if worker == 1:
-        x = float(1.0)
-        for _ in range(work):
-            x = x * 0.9999999 + 1.0e-7
-        out[0] = x
+        reads = int(0)
+        while _read_now(sync.counters, 3) == 0 and reads < most_reads:
+            reads += 1
+        out[0] = reads
     launch.worker_barrier(sync, workers)
-    out[worker + 1] = 1.0
+    out[worker + 1] = 1
 
 
 def test_workers_meeting_at_barriers_give_what_one_worker_gives():
@@ -155,14 +169,15 @@ def test_a_worker_that_never_arrives_is_an_error_not_a_hang(monkeypatch):
 
 @pytest.mark.skipif(launch._SCHED_YIELD == 0, reason="this platform's C library has no sched_yield")
 def test_a_worker_waiting_long_gives_its_core_away():
-    """Worker 0 waits at the barrier while worker 1 computes (some millions of steps, far beyond
-    YIELD_AFTER_SPINS pauses): it yields its core instead of spinning, and both pass the barrier
-    once worker 1 arrives. (Beside a busy process on two cores a spinning worker held the core
-    its partner needed, and the sweeps took 11 times as long.)"""
+    """Worker 0 waits at the barrier until worker 1 sees it give its core away; had it only
+    spun, worker 1 would arrive after 10^8 looks with no yield counted. Both then pass the
+    barrier. (Beside a busy process on two cores a spinning worker held the core its partner
+    needed, and the sweeps took 11 times as long.)"""
     sync = launch.worker_sync("cpu")
-    out = wp.zeros(3, dtype=float, device="cpu")
-    launch.launch_workers(_one_arrives_late, 2, sync, [5_000_000, out], "cpu")
+    out = wp.zeros(3, dtype=int, device="cpu")
+    launch.launch_workers(_one_arrives_late, 2, sync, [100_000_000, out], "cpu")
     arrivals, generation, failed, yields = sync.counters.numpy().tolist()
     assert (arrivals, generation, failed) == (0, 1, 0)
     assert yields > 0
-    assert out.numpy()[1:].tolist() == [1.0, 1.0]
+    assert out.numpy()[0] < 100_000_000
+    assert out.numpy()[1:].tolist() == [1, 1]
