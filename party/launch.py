@@ -165,8 +165,8 @@ _SCHED_YIELD = _sched_yield_address()
 @wp.struct
 class WorkerSync:
     """What the workers of a :func:`launch_workers` launch share: ``counters`` (arrivals,
-    generation and failed, left zeroed by a launch, and the times a waiting worker gave its core
-    away, which only grows), the spins a worker waits before it gives up on the others
+    generation and failed, left zeroed by a launch, and a running count of the times a waiting
+    worker gave its core away), the spins a worker waits before it gives up on the others
     (:data:`WORKER_SPINS`), the spins before it starts giving its core away
     (:data:`YIELD_AFTER_SPINS`) and the address of ``sched_yield`` (0: spin only)."""
 
