@@ -16,10 +16,11 @@ launches per step and share of the steps' time, largest first. Every launch that
 through :mod:`party.launch` is timed (a CPU launch returns when its kernel has run) and the
 implicit solve replayed as a recorded graph counts as one entry; the rest of a step (host
 work between launches) is the last line. The sphere drop and the square leave out their first
-steps (compilation, the first search). Timing every launch costs a few percent. Run it as a
-script (it imports ``scaling.py`` and ``compare.py`` from beside it) on an otherwise idle
-machine: the implicit solver's worker threads spin while they wait for each other, and a core
-taken by another process stretches the sweeps several times over.
+steps (compilation, the first search). Timing every launch costs a few percent. For the
+implicit solver it also prints how often its worker threads gave their core away while waiting
+for each other (``SolverImplicit.worker_yields``): at 64 x 64 some 160 times a step alone, some
+1,500 beside one busy process, whose core the sweeps then share. Run it as a script (it imports
+``scaling.py`` and ``compare.py`` from beside it), on an otherwise idle machine.
 """
 
 from __future__ import annotations
@@ -116,21 +117,26 @@ def run_steps(model, solver, dt: float, steps: int, clock: KernelClock) -> None:
     for _ in range(WARM_UP_STEPS):
         solver.step(state, scratch, control, dt)
         state, scratch = scratch, state
+    yields = solver.worker_yields() if hasattr(solver, "worker_yields") else 0
     with clock.installed(), clock.running():
         started = time.perf_counter()
         for _ in range(steps):
             solver.step(state, scratch, control, dt)
             state, scratch = scratch, state
         wall = time.perf_counter() - started
-    describe(solver, dt)
+    describe(solver, dt, steps, yields)
     clock.report(wall, steps)
 
 
-def describe(solver, dt: float) -> None:
-    """Print the implicit solver's sweeps, colours and worker threads for steps of ``dt`` [s]."""
+def describe(solver, dt: float, steps: int, yields_before: int) -> None:
+    """Print the implicit solver's sweeps, colours and worker threads for steps of ``dt`` [s],
+    and how often a worker gave its core away in ``steps`` steps (the count was
+    ``yields_before`` before them)."""
     if hasattr(solver, "sweeps"):
+        yields = (solver.worker_yields() - yields_before) / steps
         print(f"implicit solver: {solver.sweeps(dt)} sweeps a step of {dt:.6g} s over {len(solver.color_offsets) - 1} "
-              f"colours, {solver.workers} worker thread(s)")
+              f"colours, {solver.workers} worker thread(s), which gave their core away {yields:.1f} times a step "
+              "while waiting for each other")
 
 
 def profile_sphere_drop(args: argparse.Namespace) -> None:
