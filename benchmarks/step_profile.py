@@ -39,6 +39,7 @@ import warp as wp  # noqa: E402
 
 import party.launch  # noqa: E402
 from party.scenes import sphere_drop  # noqa: E402
+from party.solvers.implicit import SolverImplicit  # noqa: E402
 
 WARM_UP_STEPS = 3
 GRAPH = "(implicit solve, replayed graph)"
@@ -117,7 +118,7 @@ def run_steps(model, solver, dt: float, steps: int, clock: KernelClock) -> None:
     for _ in range(WARM_UP_STEPS):
         solver.step(state, scratch, control, dt)
         state, scratch = scratch, state
-    yields = solver.worker_yields() if hasattr(solver, "worker_yields") else 0
+    yields = solver.worker_yields() if isinstance(solver, SolverImplicit) else 0
     with clock.installed(), clock.running():
         started = time.perf_counter()
         for _ in range(steps):
@@ -132,7 +133,7 @@ def describe(solver, dt: float, steps: int, yields_before: int) -> None:
     """Print the implicit solver's sweeps, colours and worker threads for steps of ``dt`` [s],
     and how often a worker gave its core away in ``steps`` steps (the count was
     ``yields_before`` before them)."""
-    if hasattr(solver, "sweeps"):
+    if isinstance(solver, SolverImplicit):
         yields = (solver.worker_yields() - yields_before) / steps
         print(f"implicit solver: {solver.sweeps(dt)} sweeps a step of {dt:.6g} s over {len(solver.color_offsets) - 1} "
               f"colours, {solver.workers} worker thread(s), which gave their core away {yields:.1f} times a step "

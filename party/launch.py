@@ -178,11 +178,10 @@ class WorkerSync:
 
 
 def worker_sync(device: Any = None) -> WorkerSync:
-    """A :class:`WorkerSync` with zeroed counters on ``device``, for :func:`launch_workers`."""
+    """A :class:`WorkerSync` with zeroed counters on ``device``, for :func:`launch_workers`
+    (which sets its spin limits at each launch)."""
     sync = WorkerSync()
     sync.counters = wp.zeros(4, dtype=int, device=device)
-    sync.max_spins = WORKER_SPINS
-    sync.yield_after = YIELD_AFTER_SPINS
     sync.yield_cpu = _SCHED_YIELD
     return sync
 
@@ -282,13 +281,13 @@ def worker_count(items: int, device: Any = None) -> int:
 def launch_workers(kernel: Any, workers: int, sync: WorkerSync, inputs: Sequence[Any], device: Any = None) -> None:
     """Launch ``kernel`` once per worker (``dim=1``), each on its own CPU thread at once (for the
     CPU: see :func:`worker_count`). The kernel's first arguments are the worker's index, the
-    number of workers and ``sync`` (:func:`worker_sync`; its spin limit set to
-    :data:`WORKER_SPINS` here); ``inputs`` are the rest. The workers meet at
+    number of workers and ``sync`` (:func:`worker_sync`; its spin limits set here to
+    :data:`WORKER_SPINS` and :data:`YIELD_AFTER_SPINS`); ``inputs`` are the rest. The workers meet at
     :func:`worker_barrier`. Every launch is prepared before any runs, so that none can fail
     while the others wait for it. One worker is a plain launch. Raises
     :class:`~party.errors.WorkersLost` where a worker waited in vain."""
     device = wp.get_device(device)
-    sync.max_spins = WORKER_SPINS
+    sync.max_spins, sync.yield_after = WORKER_SPINS, YIELD_AFTER_SPINS
     if workers <= 1:
         launch(kernel, 1, [0, 1, sync, *inputs], device=device)
         return
