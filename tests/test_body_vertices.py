@@ -79,9 +79,10 @@ def test_a_body_vertex_is_counted_through_the_cloth_when_the_cloth_lies_behind_i
 def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothing(monkeypatch):
     """A 0.3 m cloth (2 cm net) falling 5 mm onto the cone's tip and sliding off it, 1 s of
     implicit steps, the body searched again only for the nodes (cloth triangles) that may have
-    left the region searched for them: at every step each node still holds every body
-    triangle, and each cloth triangle every body vertex, that a search of its step alone
-    (no margin) finds, though most searches were left out."""
+    left the region searched for them: at each of a step's two Collision()s (the second after
+    the plastic limit) each node still holds every body triangle, and each cloth triangle
+    every body vertex, that a search of its step alone (no margin) finds, though most
+    searches were left out."""
     import warp as wp
 
     from party.collision.body import MAX_FACES, gather_body_faces_bvh
@@ -98,20 +99,24 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
     faces, face_count = wp.zeros((n, MAX_FACES), dtype=int), wp.zeros(n, dtype=int)
     vertices, vertex_count = wp.zeros((t, MAX_VERTICES), dtype=int), wp.zeros(t, dtype=int)
     distance, overflow = wp.zeros((t, MAX_VERTICES), dtype=float), wp.zeros(1, dtype=int)
-    counts = {"searched": 0, "possible": 0, "needed": 0, "missing": 0}
+    counts = {"searched": 0, "possible": 0, "needed": 0, "missing": 0, "continuing": 0}
     search_body = CollisionPipeline._search_body
 
-    def checked(self, x, v, state, dt):
+    def checked(self, x, v, state, dt, continuing):
         before = self._body_ref.numpy().copy()
-        search_body(self, x, v, state, dt)
+        search_body(self, x, v, state, dt, continuing)
         counts["searched"] += int(np.any(self._body_ref.numpy() != before, axis=1).sum())
         counts["possible"] += n
+        counts["continuing"] += int(continuing)
+        unused = wp.zeros(n, dtype=int)
         wp.launch(gather_body_faces_bvh, dim=n, inputs=[0, x, v, model.node_inv_mass, model.node_thickness,
-                                                        self.body_tree.id, dt, 0.0, 1, wp.zeros(n, dtype=wp.vec3),
-                                                        faces, face_count, overflow])
+                                                        self.body_tree.id, dt, 0.0, 1, 0, wp.zeros(n, dtype=wp.vec3),
+                                                        wp.zeros(n, dtype=wp.vec3), unused, faces, face_count,
+                                                        overflow])
         wp.launch(gather_body_vertices, dim=t, inputs=[0, x, v, model.node_thickness, model.triangle_nodes,
                                                        self._vertex_tree.id, state.collider_q, state.collider_qd, dt,
-                                                       0.0, 1, wp.zeros((t, 3), dtype=wp.vec3), vertices,
+                                                       0.0, 1, 0, wp.zeros((t, 3), dtype=wp.vec3),
+                                                       wp.zeros((t, 3), dtype=wp.vec3), unused, vertices,
                                                        vertex_count, distance, overflow])
         pairs = ((faces, face_count, self.body_faces, self.body_face_count),
                  (vertices, vertex_count, self.body_vertices, self.body_vertex_count))
@@ -128,6 +133,7 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
     assert overflow.numpy()[0] == 0
     assert counts["needed"] > 1000 and counts["missing"] == 0
     assert counts["searched"] < 0.5 * counts["possible"]
+    assert counts["continuing"] == 300
 
 
 def test_cloth_pressed_onto_a_rim_is_pushed_up_off_its_vertices_not_outward():

@@ -250,3 +250,40 @@ def test_cloth_moving_as_a_whole_keeps_its_cloth_candidates(broad_phase):
     assert collision.searches == 2
     gap = start[node + net.node_count, 2] - positions[node, 2]
     assert gap > 0.0 and v.numpy()[node, 2] < velocities[node, 2]
+
+
+@pytest.mark.parametrize("broad_phase", ["intervals", "bvh"])
+def test_a_second_collision_of_a_step_searches_again_only_where_a_step_left_the_box_searched(broad_phase):
+    """Two layers 20 mm apart, the upper one falling 10 mm a step (nothing within reach): a
+    second Collision() of the same step (``continuing``, as after the plastic limit) whose
+    steps, shortened, stay within the boxes of the steps searched keeps the candidates
+    (though the nodes moved beyond half the margin of where they were searched from); one
+    whose steps now reach 30 mm, through the lower layer, searches again, and the layers end
+    the step a thickness apart (reusing the candidates, the upper layer went through)."""
+    net = rectangular_net(0.1, 0.1, 0.01)
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    for z in (0.0, 0.02):
+        b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.full(net.node_count, z)])
+    model = b.finalize("cpu")
+    collision = pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase=broad_phase))
+    state = model.state()
+    dt = 1.0 / 300.0
+    upper = np.arange(model.node_count) >= net.node_count
+    x = wp.array(model.host["points"].astype(np.float32), dtype=wp.vec3, device="cpu")
+
+    def velocities(step: float) -> wp.array:
+        v = np.zeros((model.node_count, 3), np.float32)
+        v[upper, 2] = -step / dt
+        return wp.array(v, dtype=wp.vec3, device="cpu")
+
+    first = velocities(0.01)
+    collision.apply(x, first, state, dt)
+    assert collision.searches == 1 and np.array_equal(first.numpy(), velocities(0.01).numpy())
+    shortened = velocities(0.006)
+    collision.apply(x, shortened, state, dt, continuing=True)
+    assert collision.searches == 1 and np.array_equal(shortened.numpy(), velocities(0.006).numpy())
+    through = velocities(0.03)
+    collision.apply(x, through, state, dt, continuing=True)
+    assert collision.searches == 2
+    ends = x.numpy()[:, 2] + through.numpy()[:, 2] * dt
+    assert (ends[upper] - ends[~upper]).min() >= 0.9 * wool_flannel().thickness

@@ -4,7 +4,7 @@ response of eqs. (8)-(12)."""
 import warp as wp
 
 from .geometry import (boxes_overlap, closest_point_barycentric, differs, friction_restitution_response, interpolate,
-                       step_box, unchanged)
+                       step_box, step_within, unchanged)
 from .intervals import IntervalLists, first_visit, query_axis
 
 EDGE_TOLERANCE = 0.25
@@ -22,6 +22,19 @@ def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float
     return wp.length(x - ref) + wp.length(v) * dt <= margin
 
 
+@wp.func
+def covered(x: wp.vec3, v: wp.vec3, dt: float, ref: wp.vec3, ref_step: wp.vec3, margin: float,
+            continuing: int) -> bool:
+    """Whether a node's candidates still serve its step from ``x`` by ``v dt``: it stays within
+    ``margin`` (half the search margin) of where it was searched from (:func:`still_covered`),
+    or, in a second Collision() of the same step (``continuing`` 1), of the box of the step it
+    was searched for (:func:`step_within`). Between steps only the first counts: lists kept
+    longer by the box went stale (see docs/design.md)."""
+    if still_covered(x, v, ref, dt, margin):
+        return True
+    return continuing != 0 and step_within(x, x + v * dt, ref, ref_step, margin)
+
+
 @wp.kernel
 def gather_body_faces(
     first: int,
@@ -33,7 +46,10 @@ def gather_body_faces(
     dt: float,
     margin: float,
     everything: int,
+    continuing: int,
     ref: wp.array(dtype=wp.vec3),
+    ref_step: wp.array(dtype=wp.vec3),
+    searched_again: wp.array(dtype=int),
     faces_out: wp.array(dtype=int, ndim=2),
     face_count: wp.array(dtype=int),
     overflow: wp.array(dtype=int),
@@ -41,12 +57,16 @@ def gather_body_faces(
     """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
     lets the answer serve the next steps, walked on the axis with n = min(n_x, n_y, n_z) list
     entries and box-checked in 3-D. The triangles found are kept for the narrow phase, and r
-    in ``ref``. With ``everything`` 0 only nodes whose step leaves ``margin`` of ``ref`` search
-    again (the body must be static then)."""
+    in ``ref`` and the step in ``ref_step``. With ``everything`` 0 only nodes whose step left the
+    region searched (:func:`covered`) search again (the body must be static then, or
+    ``continuing``); with ``continuing`` 1 they are marked in ``searched_again``."""
     i = first + wp.tid()
-    if everything == 0 and still_covered(x[i], v[i], ref[i], dt, margin):
+    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing):
         return
+    if continuing != 0:
+        searched_again[i] = 1
     ref[i] = x[i]
+    ref_step[i] = v[i] * dt
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return
@@ -82,7 +102,10 @@ def gather_body_faces_bvh(
     dt: float,
     margin: float,
     everything: int,
+    continuing: int,
     ref: wp.array(dtype=wp.vec3),
+    ref_step: wp.array(dtype=wp.vec3),
+    searched_again: wp.array(dtype=int),
     faces_out: wp.array(dtype=int, ndim=2),
     face_count: wp.array(dtype=int),
     overflow: wp.array(dtype=int),
@@ -90,9 +113,12 @@ def gather_body_faces_bvh(
     """:func:`gather_body_faces` with a BVH (:mod:`party.collision.bvh`) in place of the
     interval lists: the same box, the same triangles."""
     i = first + wp.tid()
-    if everything == 0 and still_covered(x[i], v[i], ref[i], dt, margin):
+    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing):
         return
+    if continuing != 0:
+        searched_again[i] = 1
     ref[i] = x[i]
+    ref_step[i] = v[i] * dt
     face_count[i] = 0
     if inv_mass[i] == 0.0:
         return

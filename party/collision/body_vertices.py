@@ -19,7 +19,7 @@ eqs. (13)-(14)).
 
 import warp as wp
 
-from .body import EDGE_TOLERANCE, still_covered
+from .body import EDGE_TOLERANCE, covered
 from .geometry import closest_point_barycentric, interpolate, triangle_step
 from .nearest import keep_nearest
 
@@ -60,7 +60,10 @@ def gather_body_vertices(
     dt: float,
     margin: float,
     everything: int,
+    continuing: int,
     ref: wp.array(dtype=wp.vec3, ndim=2),
+    ref_step: wp.array(dtype=wp.vec3, ndim=2),
+    searched_again: wp.array(dtype=int),
     out: wp.array(dtype=int, ndim=2),
     out_count: wp.array(dtype=int),
     out_distance: wp.array(dtype=float, ndim=2),
@@ -71,19 +74,29 @@ def gather_body_vertices(
     the triangle than eps, the search margin and both steps: until the next search each moves
     at most half the margin beyond its step (the reasoning of
     :func:`~party.collision.cloth.keep_candidate`). The nearest MAX_VERTICES are kept, and the
-    nodes' places in ``ref``. With ``everything`` 0 only triangles with a node whose step leaves
-    ``margin`` of its place there search again (the body must be static then)."""
+    nodes' places in ``ref`` and their steps in ``ref_step``. With ``everything`` 0 only
+    triangles with a node whose step left the region searched for it
+    (:func:`~party.collision.body.covered`) search again (the body must be static then, or
+    ``continuing``); with ``continuing`` 1 their nodes are marked in ``searched_again``."""
     t = first + wp.tid()
     a = tris[t, 0]
     b = tris[t, 1]
     c = tris[t, 2]
     if everything == 0:
-        if (still_covered(x[a], v[a], ref[t, 0], dt, margin) and still_covered(x[b], v[b], ref[t, 1], dt, margin)
-                and still_covered(x[c], v[c], ref[t, 2], dt, margin)):
+        if (covered(x[a], v[a], dt, ref[t, 0], ref_step[t, 0], margin, continuing)
+                and covered(x[b], v[b], dt, ref[t, 1], ref_step[t, 1], margin, continuing)
+                and covered(x[c], v[c], dt, ref[t, 2], ref_step[t, 2], margin, continuing)):
             return
+    if continuing != 0:
+        searched_again[a] = 1
+        searched_again[b] = 1
+        searched_again[c] = 1
     ref[t, 0] = x[a]
     ref[t, 1] = x[b]
     ref[t, 2] = x[c]
+    ref_step[t, 0] = v[a] * dt
+    ref_step[t, 1] = v[b] * dt
+    ref_step[t, 2] = v[c] * dt
     eps = wp.max(thickness[a], wp.max(thickness[b], thickness[c]))
     lo = wp.min(wp.min(wp.min(x[a], x[b]), x[c]), wp.min(wp.min(x[a] + v[a] * dt, x[b] + v[b] * dt), x[c] + v[c] * dt))
     hi = wp.max(wp.max(wp.max(x[a], x[b]), x[c]), wp.max(wp.max(x[a] + v[a] * dt, x[b] + v[b] * dt), x[c] + v[c] * dt))

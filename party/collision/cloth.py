@@ -4,7 +4,8 @@ barycentric weights."""
 
 import warp as wp
 
-from .geometry import boxes_overlap, closest_point_barycentric, interpolate, step_box, triangle_step, unchanged
+from .geometry import (boxes_overlap, closest_point_barycentric, interpolate, step_box, step_within, triangle_step,
+                       unchanged)
 from .intervals import IntervalLists, first_visit, query_axis
 from .nearest import keep_nearest
 
@@ -72,18 +73,33 @@ def sum_motion(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_ref: wp
 
 @wp.kernel
 def moved_beyond(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_ref: wp.array(dtype=wp.vec3),
-                 total: wp.array(dtype=wp.vec3), share: float, dt: float, margin: float, flag: wp.array(dtype=int)):
+                 step_ref: wp.array(dtype=wp.vec3), total: wp.array(dtype=wp.vec3),
+                 velocity_sum_ref: wp.array(dtype=wp.vec3), share: float, dt: float, margin: float, continuing: int,
+                 flag: wp.array(dtype=int)):
     """Flag when some node may have left the region its remembered candidates were searched
     for: when its displacement since the search plus its step, each beyond the mean of all
     nodes' (``share`` times ``total``, :func:`sum_motion`), pass half the ``margin`` [m]. A
     motion common to all nodes brings no node nearer a triangle, and the contacts are judged
     on relative steps (:func:`detect_cloth`), so a node and a triangle whose nodes all stay
     within half the margin of that common motion come no nearer than the margin allowed for.
-    Cloth falling as a whole keeps its candidates."""
+    Cloth falling as a whole keeps its candidates.
+
+    In a second Collision() of the same step (``continuing`` 1) a node's step also counts as
+    covered where, less the common motion since the search (``velocity_sum_ref``: the
+    velocities' sum at the search), both its ends stay within half the margin of the box of the step it was
+    searched for (from ``x_ref`` by ``step_ref``): the search grew that box by eps and half
+    the margin, each triangle's by half the margin."""
     i = wp.tid()
-    moved = x[i] - x_ref[i] - share * total[0]
-    if wp.length(moved) + wp.length(v[i] - share * total[1]) * dt > 0.5 * margin:
-        flag[0] = 1
+    shift = share * total[0]
+    moved = x[i] - x_ref[i] - shift
+    if wp.length(moved) + wp.length(v[i] - share * total[1]) * dt <= 0.5 * margin:
+        return
+    if continuing != 0:
+        start = x[i] - shift
+        end = start + (v[i] - share * (total[1] - velocity_sum_ref[0])) * dt
+        if step_within(start, end, x_ref[i], step_ref[i], 0.5 * margin):
+            return
+    flag[0] = 1
 
 
 @wp.kernel
@@ -101,12 +117,14 @@ def gather_cloth_triangles_bvh(
     out: wp.array(dtype=int, ndim=2),
     out_count: wp.array(dtype=int),
     out_distance: wp.array(dtype=float, ndim=2),
+    step_ref: wp.array(dtype=wp.vec3),
     overflow: wp.array(dtype=int),
 ):
     """:func:`gather_cloth_triangles` with a BVH (:mod:`party.collision.bvh`) in place of the
     interval lists: the same box, the same triangles kept."""
     i = first + wp.tid()
     x0 = x[i]
+    step_ref[i] = v[i] * dt
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
     reach = search_reach(thickness[i], margin, v[i], dt)
     query = wp.bvh_query_aabb(bvh, lo, hi)
@@ -133,6 +151,7 @@ def gather_cloth_triangles(
     out: wp.array(dtype=int, ndim=2),
     out_count: wp.array(dtype=int),
     out_distance: wp.array(dtype=float, ndim=2),
+    step_ref: wp.array(dtype=wp.vec3),
     overflow: wp.array(dtype=int),
 ):
     """The interval-list search of section 6.1 against the cloth's own triangles: the box
@@ -140,9 +159,10 @@ def gather_cloth_triangles(
     entries. Triangles holding the node or one of its excluded nodes (section 6.3; see
     :meth:`~party.collision.pipeline.CollisionPipeline._excluded_nodes`) are left out; the
     nearest MAX_CANDIDATES others are kept for the following steps (the count of farther ones
-    dropped goes to ``overflow``)."""
+    dropped goes to ``overflow``), and the node's step in ``step_ref`` (:func:`moved_beyond`)."""
     i = first + wp.tid()
     x0 = x[i]
+    step_ref[i] = v[i] * dt
     lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
     reach = search_reach(thickness[i], margin, v[i], dt)
     sel = query_axis(lists, lo, hi)

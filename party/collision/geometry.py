@@ -62,6 +62,17 @@ def step_box(x0: wp.vec3, step: wp.vec3, pad: float):
 
 
 @wp.func
+def step_within(start: wp.vec3, end: wp.vec3, ref: wp.vec3, ref_step: wp.vec3, margin: float) -> bool:
+    """Whether a step from ``start`` to ``end`` stays within ``margin`` [m] of the box spanned by
+    the step its candidates were searched for, from ``ref`` by ``ref_step``: the search grew
+    that box by eps and the margin, so the candidates cover any such step too."""
+    lo, hi = step_box(ref, ref_step, margin)
+    return (lo[0] <= wp.min(start[0], end[0]) and wp.max(start[0], end[0]) <= hi[0]
+            and lo[1] <= wp.min(start[1], end[1]) and wp.max(start[1], end[1]) <= hi[1]
+            and lo[2] <= wp.min(start[2], end[2]) and wp.max(start[2], end[2]) <= hi[2])
+
+
+@wp.func
 def boxes_overlap(lo0: wp.vec3, hi0: wp.vec3, lo1: wp.vec3, hi1: wp.vec3) -> bool:
     return (lo0[0] <= hi1[0] and lo1[0] <= hi0[0] and lo0[1] <= hi1[1] and lo1[1] <= hi0[1]
             and lo0[2] <= hi1[2] and lo1[2] <= hi0[2])

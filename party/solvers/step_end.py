@@ -105,7 +105,7 @@ class StepEnd:
             self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
         if self.limit_after_contact:
             self._apply_plastic_limit(state_out, dt, over_relaxation=1.0)
-            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, search=False,
+            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, continuing=True,
                                  changed=self._moved_in if self.max_speed is None else None)
         launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
         if self.guard is not None:
