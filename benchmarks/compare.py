@@ -13,7 +13,9 @@ the ratio to party's implicit solver, and the outcome checked the same way for a
 distance of a node from the sphere's centre, nodes inside the sphere, cloth crossings: mesh edges
 through a triangle of the final mesh, a peer's quads split in two; final height range, and how far
 the final shape lies from party implicit's: the mean and the largest distance from a node of either
-to the nearest node of the other, the symmetric Hausdorff distance over nodes). The outcome is
+to the nearest point of the other's surface, the largest being the symmetric Hausdorff distance
+between the nodes and the surfaces; a node's nearest node would count the net's sampling as a
+difference, up to half a spacing between two nets on one surface). The outcome is
 equal where no node is inside the sphere, no edge crosses the cloth (with self-collision on) and
 the shapes lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's
 implicit solver at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where
@@ -143,17 +145,18 @@ def outcome(points: np.ndarray, triangles: np.ndarray) -> dict:
     nan = bool(np.isnan(points).any())
     return {"nodes": int(len(points)), "min_distance_from_centre_m": float(r.min()),
             "nodes_inside": int((r < SPHERE_RADIUS).sum()), "z_min_m": float(points[:, 2].min()),
-            "z_max_m": float(points[:, 2].max()), "nan": nan, "points": points,
+            "z_max_m": float(points[:, 2].max()), "nan": nan, "points": points, "triangles": np.asarray(triangles),
             "cloth_crossings": -1 if nan else cloth_crossings(points, np.asarray(triangles))}
 
 
-def shape_distance(points: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
-    """Mean and largest distance [m] from each node of either point set to the other's nearest
-    node (the largest is the symmetric Hausdorff distance over nodes)."""
-    from scipy.spatial import cKDTree
+def shape_distance(result: dict, reference: dict) -> tuple[float, float]:
+    """Mean and largest distance [m] from each node of either result (its ``points`` and
+    ``triangles``) to the nearest point of the other's surface (the largest is the symmetric
+    Hausdorff distance between the nodes and the surfaces)."""
+    from party.output.metrics import distances_to_surface
 
-    there = cKDTree(reference).query(points)[0]
-    back = cKDTree(points).query(reference)[0]
+    there = distances_to_surface(result["points"], reference["points"], reference["triangles"])
+    back = distances_to_surface(reference["points"], result["points"], result["triangles"])
     both = np.concatenate([there, back])
     return float(both.mean()), float(both.max())
 
@@ -231,7 +234,7 @@ def report(rows: list[dict], out: Path) -> None:
             r["ratio_to_party_implicit"] = ratio
             shape = equal = ""
             if reference is not None and not (r["nan"] or reference["nan"]):
-                mean, largest = shape_distance(r["points"], reference["points"])
+                mean, largest = shape_distance(r, reference)
                 r["shape_mean_m"], r["shape_max_m"] = mean, largest
                 crossed = r["self_collision"] and r["cloth_crossings"] != 0
                 r["equal_outcome"] = r["nodes_inside"] == 0 and not crossed and largest <= SAME_SHAPE
@@ -248,7 +251,7 @@ def report(rows: list[dict], out: Path) -> None:
         if "blender" in times and "party-implicit-150hz" in times:
             print(f"{scene}: at Blender's step (1/150 s) party's implicit solver is "
                   f"{times['blender'] / times['party-implicit-150hz']:.2f}x faster than Blender")
-    plain = [{k: v for k, v in r.items() if k != "points"} for r in rows]
+    plain = [{k: v for k, v in r.items() if k not in ("points", "triangles")} for r in rows]
     with open(out / "compare.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=sorted({k for r in plain for k in r}))
         writer.writeheader()

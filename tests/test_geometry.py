@@ -40,3 +40,16 @@ def test_segment_triangle_distance_is_the_smallest_distance_between_their_points
     assert np.all(exact <= sampled + 1e-5)
     assert np.all(sampled - exact < 0.03)
     assert (exact == 0.0).sum() > 0 and (exact > 0.1).sum() > 10
+
+
+def test_a_points_distance_to_a_surface_is_to_its_nearest_point_not_its_nearest_node():
+    """Points over a 1 m square of two triangles (nodes at its corners only): 5 mm over its
+    middle lies 5 mm from the surface (0.7 m from any node); beyond an edge, the distance is to
+    the edge; beyond a corner, to the corner."""
+    from party.output.metrics import distances_to_surface
+
+    square = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    triangles = np.array([[0, 1, 2], [0, 2, 3]])
+    points = np.array([[0.5, 0.5, 0.005], [0.5, -0.03, 0.04], [1.03, 1.04, 0.0]])
+    expected = [0.005, 0.05, 0.05]
+    assert np.allclose(distances_to_surface(points, square, triangles), expected, atol=1e-6)

@@ -1,6 +1,6 @@
 """Checks of a result, independent of the solver's own collision machinery (Warp BVHs):
 nodes inside colliders, distance to colliders, body vertices through the cloth, cloth layer
-crossings, elongation."""
+crossings, elongation, the distance between two results' surfaces."""
 
 from __future__ import annotations
 
@@ -48,6 +48,31 @@ def _height_over_vertex(cloth: wp.uint64, vertices: wp.array(dtype=wp.vec3), nor
     if found.result:
         q = wp.mesh_eval_position(cloth, found.face, found.u, found.v)
         height[i] = wp.dot(q - vertices[i], normals[i])
+
+
+@wp.kernel
+def _distance_to_surface(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,
+                         distance: wp.array(dtype=float)):
+    i = wp.tid()
+    distance[i] = max_dist
+    found = wp.mesh_query_point_no_sign(mesh, points[i], max_dist)
+    if found.result:
+        distance[i] = wp.length(wp.mesh_eval_position(mesh, found.face, found.u, found.v) - points[i])
+
+
+def distances_to_surface(points: np.ndarray, surface_points: np.ndarray, surface_triangles: np.ndarray,
+                         device: str = "cpu", max_dist: float = 1.0e3) -> np.ndarray:
+    """Each point's distance [m] to the nearest point of a triangle surface (``surface_points``
+    [m], ``surface_triangles`` node ids), up to ``max_dist``. Between two results of one cloth
+    the nearest node would count the net's sampling as a difference (up to half a spacing on
+    the same surface); the surface does not."""
+    mesh = wp.Mesh(points=wp.array(surface_points.astype(np.float32), dtype=wp.vec3, device=device),
+                   indices=wp.array(surface_triangles.ravel().astype(np.int32), dtype=int, device=device))
+    distance = wp.zeros(len(points), dtype=float, device=device)
+    launch(_distance_to_surface, dim=len(points),
+           inputs=[mesh.id, wp.array(points.astype(np.float32), dtype=wp.vec3, device=device), float(max_dist),
+                   distance], device=device)
+    return distance.numpy().astype(float)
 
 
 def body_vertices_through(points: np.ndarray, triangles: np.ndarray, colliders, reach: float = 0.02,
