@@ -2,7 +2,7 @@
 
     python benchmarks/compare.py [--grids 64 100] [--self-collision off on]
                                  [--systems party-implicit party-implicit-150hz party-explicit blender newton]
-                                 [--seconds 1] [--garments/--no-garments] [--out benchmarks/results]
+                                 [--seconds 1] [--repeats 1] [--garments/--no-garments] [--out benchmarks/results]
 
 Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius 0.3 m
 for 1 s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for the peers). Each peer
@@ -25,6 +25,11 @@ Scenes (b) and (c), party only: the reference dress (``party/data/patterns``) on
 dress form and GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj`` (from
 ``../shared/data/garmentcode``, skipped when absent) sewn and draped to rest, wall seconds
 in all, against GarmentCode's own 1,086 s for the flare dress.
+
+With ``--repeats N`` every run is made N times, the systems taking turns within each round so
+that a change in the machine's load falls on all of them alike; the times reported are the
+medians, with the fastest and slowest run (this 2-core machine's runs of one setting spread by
+up to a fifth either way), and the outcome is the first run's.
 
 Writes ``OUT/compare.csv`` and ``OUT/compare.png`` (a bar chart).
 """
@@ -63,30 +68,61 @@ def main() -> None:
     parser.add_argument("--systems", nargs="+", default=SYSTEMS, choices=SYSTEMS)
     parser.add_argument("--seconds", type=float, default=1.0,
                         help="simulated seconds of the sphere drop (at 1 s the cloth still slides)")
+    parser.add_argument("--repeats", type=int, default=1, help="runs of each system and scene; medians are reported")
     parser.add_argument("--garments", action=argparse.BooleanOptionalAction, default=True)
     parser.add_argument("--peer-timeout", type=float, default=1200.0, help="seconds before a peer run is stopped")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args()
     if not args.seconds >= 0.1:
         parser.error(f"--seconds must be at least 0.1, got {args.seconds}")
+    if args.repeats < 1:
+        parser.error(f"--repeats must be at least 1, got {args.repeats}")
     args.out.mkdir(parents=True, exist_ok=True)
 
     rows = []
     for grid in args.grids:
         for self_collision in args.self_collision:
             scene = f"sphere-drop {grid}x{grid} self {self_collision}"
-            for system in args.systems:
-                print(f"{scene}: {system} ...", flush=True)
-                result = run_sphere(system, grid, self_collision == "on", args.seconds, args.peer_timeout)
-                rows.append({"scene": scene, "system": system, "self_collision": self_collision == "on", **result})
-                print(f"    {describe(rows[-1])}", flush=True)
+            runs = {system: [] for system in args.systems}
+            for round_ in range(args.repeats):
+                for system in args.systems:
+                    print(f"{scene}: {system}{turn(round_, args.repeats)} ...", flush=True)
+                    runs[system].append(run_sphere(system, grid, self_collision == "on", args.seconds,
+                                                   args.peer_timeout))
+                    print(f"    {describe(runs[system][-1])}", flush=True)
+            rows += [{"scene": scene, "system": system, "self_collision": self_collision == "on",
+                      **median_run(results, "wall_per_simulated_second")} for system, results in runs.items()]
     if args.garments:
         for label, pattern, body in garment_scenes():
-            for system in [s for s in args.systems if s in ("party-implicit", "party-explicit")]:
-                print(f"{label}: {system} ...", flush=True)
-                rows.append({"scene": label, "system": system, **run_drape(pattern, body, system.split("-")[1])})
-                print(f"    {describe(rows[-1])}", flush=True)
+            drapers = [s for s in args.systems if s in ("party-implicit", "party-explicit")]
+            runs = {system: [] for system in drapers}
+            for round_ in range(args.repeats):
+                for system in drapers:
+                    print(f"{label}: {system}{turn(round_, args.repeats)} ...", flush=True)
+                    runs[system].append(run_drape(pattern, body, system.split("-")[1]))
+                    print(f"    {describe(runs[system][-1])}", flush=True)
+            rows += [{"scene": label, "system": system, **median_run(results, "wall_seconds_to_rest")}
+                     for system, results in runs.items()]
     report(rows, args.out)
+
+
+def turn(round_: int, repeats: int) -> str:
+    return f" (run {round_ + 1} of {repeats})" if repeats > 1 else ""
+
+
+def median_run(results: list[dict], key: str) -> dict:
+    """The first of a system's runs of one scene, with ``key`` (a time) replaced by the median
+    over the runs and the fastest and slowest added (``key_min``, ``key_max``, ``runs``); the
+    first error where any run failed."""
+    failed = [r for r in results if "error" in r]
+    if failed:
+        return failed[0]
+    times = [r[key] for r in results]
+    row = {**results[0], key: float(np.median(times)), f"{key}_min": min(times), f"{key}_max": max(times),
+           "runs": len(times)}
+    if "ratio_to_garmentcode" in row:
+        row["ratio_to_garmentcode"] = GARMENTCODE_SECONDS / row[key]
+    return row
 
 
 def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, timeout: float) -> dict:
@@ -202,16 +238,26 @@ def ensure_venv(peer: str) -> Path:
     return python
 
 
+def seconds_text(row: dict, key: str, digits: int = 2) -> str:
+    """A time of ``row``, with the range over its runs where there were several."""
+    text = f"{row[key]:.{digits}f}"
+    if row.get("runs", 1) > 1:
+        text += f" ({row[key + '_min']:.{digits}f}-{row[key + '_max']:.{digits}f})"
+    return text
+
+
 def describe(row: dict) -> str:
     if "error" in row:
         return row["error"]
     if "wall_seconds_to_rest" in row:
         rest = "to rest" if row["at_rest"] else "and still moving"
-        return (f"{row['nodes']} nodes, {row['wall_seconds_to_rest']:.1f} s {rest}, seam gap {row['max_seam_gap_mm']:.1f} mm, "
+        return (f"{row['nodes']} nodes, {seconds_text(row, 'wall_seconds_to_rest', 1)} s {rest}, "
+                f"seam gap {row['max_seam_gap_mm']:.1f} mm, "
                 f"penetrations {row['body_penetrations']} (body vertices through {row['body_vertices_through_cloth']}), "
                 f"crossings {row['cloth_crossings']}, elongation {row['max_elongation']:.3f}, "
                 f"{row['ratio_to_garmentcode']:.1f}x GarmentCode's 1,086 s")
-    return (f"{row['wall_per_simulated_second']:.2f} s per simulated s (start-up {row['startup_seconds']:.1f} s), "
+    return (f"{seconds_text(row, 'wall_per_simulated_second')} s per simulated s "
+            f"(start-up {row['startup_seconds']:.1f} s), "
             f"min r {row['min_distance_from_centre_m']:.4f} m, inside {row['nodes_inside']}, "
             f"crossings {row['cloth_crossings']}, "
             f"z {row['z_min_m']:.3f}..{row['z_max_m']:.3f} m")
@@ -239,7 +285,7 @@ def report(rows: list[dict], out: Path) -> None:
                 crossed = r["self_collision"] and r["cloth_crossings"] != 0
                 r["equal_outcome"] = r["nodes_inside"] == 0 and not crossed and largest <= SAME_SHAPE
                 shape, equal = f"{1000 * mean:.1f} / {1000 * largest:.1f}", "yes" if r["equal_outcome"] else "no"
-            table.add_row(r["scene"], r["system"], f"{r['wall_per_simulated_second']:.2f}", f"{ratio:.2f}",
+            table.add_row(r["scene"], r["system"], seconds_text(r, "wall_per_simulated_second"), f"{ratio:.2f}",
                           f"{r['startup_seconds']:.1f}", f"{r['min_distance_from_centre_m']:.4f}", str(r["nodes_inside"]),
                           str(r["cloth_crossings"]), f"{r['z_min_m']:.3f}..{r['z_max_m']:.3f}", shape, equal)
         else:
