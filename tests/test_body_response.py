@@ -129,3 +129,37 @@ def test_inward_normals_are_refused():
     b = box((1, 1, 1))
     with pytest.raises(InvalidInput, match="inward-facing normals"):
         ColliderMesh("inside-out", b.vertices, b.faces[:, ::-1])
+
+
+def test_a_second_collision_of_a_step_searches_the_body_again_where_a_step_left_its_region():
+    """A node 20 mm over a floor stepping 10 mm down (no floor triangle within reach): a second
+    Collision() of the same step (``continuing``, as after the plastic limit) whose step now
+    reaches 30 mm down searches the floor again for that node, marks it searched again (its
+    first pass may not take over the first Collision()'s settled state), and stops its
+    approach (reusing the candidates, it went through the floor); one whose step, shortened,
+    stays within the box searched searches nothing."""
+    import warp as wp
+
+    from party.collision.pipeline import CollisionPipeline
+
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    b.add_node((0.0, 0.0, 0.02), 1e-4, fabric=wool_flannel())
+    b.add_collider(floor(0.0, size=2.0))
+    model = b.finalize("cpu")
+    collision = CollisionPipeline(model, CollisionSettings(cloth=False, broad_phase="bvh"))
+    state, dt = model.state(), 1.0 / 300.0
+    x = wp.array([[0.0, 0.0, 0.02]], dtype=wp.vec3, device="cpu")
+
+    def step_down(length: float) -> wp.array:
+        return wp.array([[0.0, 0.0, -length / dt]], dtype=wp.vec3, device="cpu")
+
+    collision.apply(x, step_down(0.01), state, dt)
+    assert collision.body_face_count.numpy()[0] == 0
+    shortened = step_down(0.006)
+    collision.apply(x, shortened, state, dt, continuing=True)
+    assert collision.body_face_count.numpy()[0] == 0 and collision._searched_again.numpy()[0] == 0
+    through = step_down(0.03)
+    collision.apply(x, through, state, dt, continuing=True)
+    assert collision.body_face_count.numpy()[0] > 0 and collision._searched_again.numpy()[0] == 1
+    assert through.numpy()[0, 2] >= 0.0  # the approach stopped (eqs. 8-12: restitution sends it back up)
+    assert x.numpy()[0, 2] + through.numpy()[0, 2] * dt >= EPS
