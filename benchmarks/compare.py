@@ -31,7 +31,8 @@ that a change in the machine's load falls on all of them alike; the times report
 medians, with the fastest and slowest run (this 2-core machine's runs of one setting spread by
 up to a fifth either way), and the outcome is the first run's.
 
-Writes ``OUT/compare.csv`` and ``OUT/compare.png`` (a bar chart).
+party runs on the CPU, as the peers do, also where a GPU is present (``benchmarks/gpu.py``
+measures the GPU). Writes ``OUT/compare.csv`` and ``OUT/compare.png`` (a bar chart).
 """
 
 from __future__ import annotations
@@ -127,7 +128,7 @@ def median_run(results: list[dict], key: str) -> dict:
 
 def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, timeout: float) -> dict:
     if system.startswith("party"):
-        return party_sphere(system.split("-")[1], grid, self_collision, seconds, PARTY_DT[system])
+        return party_sphere(system.split("-")[1], grid, self_collision, seconds, PARTY_DT[system], "cpu")
     python = ensure_venv(system)
     script, _ = PEERS[system]
     with tempfile.TemporaryDirectory() as tmp:
@@ -148,13 +149,16 @@ def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, tim
                 float(data["wall_seconds"] / data["simulated_seconds"]), **outcome(data["points"], data["triangles"])}
 
 
-def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, dt: float | None) -> dict:
+def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, dt: float | None,
+                 device: str = "cpu") -> dict:
+    """party's sphere drop on ``device``: its time per simulated second, the first frame's steps
+    (compilation) apart, and its outcome (:func:`outcome`)."""
     import warp as wp
 
     from party.scenes.sphere_drop import build
 
     started = time.perf_counter()
-    scene = build(grid=grid, self_collision=self_collision, solver=solver, duration=seconds, dt=dt)
+    scene = build(grid=grid, self_collision=self_collision, solver=solver, duration=seconds, dt=dt, device=device)
     state, scratch = scene.model.state(), scene.model.state()
     control = scene.model.control()
     steps = int(round(scene.duration / scene.dt))
@@ -214,7 +218,7 @@ def run_drape(pattern: Path, body: str, solver: str) -> dict:
 
     with tempfile.TemporaryDirectory() as tmp:
         summary = drape(pattern, body, wool_flannel(), Path(tmp) / "drape", spacing=0.02, images=False,
-                        progress=False, solver=solver)
+                        progress=False, solver=solver, device="cpu")
     return {"wall_seconds_to_rest": summary["wall_seconds"], "at_rest": summary["relaxation"]["at_rest"],
             "nodes": summary["nodes"], "draping_steps": summary["relaxation"]["draping_steps"],
             "max_seam_gap_mm": summary["max_seam_gap_mm"], "body_penetrations": summary["body_penetrations"],
