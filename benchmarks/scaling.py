@@ -14,7 +14,7 @@ that far apart and the square grows. In the 1 m square a finer net is stiffer fo
 (a node's K dt^2 / m grows as 1 / spacing^2), and from 64k nodes (4 mm) the implicit solver takes
 more sweeps a step than its 10 (``STIFFNESS_PER_SWEEP`` in ``party.solvers.implicit.solver``;
 printed per size); with self-collision each node's search also meets more triangles of its own
-layer within the thickness (3 mm) plus margin. At a fixed spacing the cost per node stays the
+layer within the thickness (3 mm) plus margin (the cloth triangles kept per node, printed). At a fixed spacing the cost per node stays the
 same. ``benchmarks/step_profile.py square --nodes N`` shows where one size's step goes.
 """
 
@@ -51,8 +51,10 @@ def square_on_sphere(nodes: int, self_collision: bool,
     return model, solver, DEFAULT_DT["implicit"]
 
 
-def step_ms(nodes: int, steps: int, self_collision: bool, spacing: float | None = None) -> tuple[int, int, float]:
-    """Node count, sweeps a step and milliseconds a step of :func:`square_on_sphere`."""
+def step_ms(nodes: int, steps: int, self_collision: bool,
+            spacing: float | None = None) -> tuple[int, int, float, float]:
+    """Node count, sweeps a step, milliseconds a step of :func:`square_on_sphere` and the cloth
+    triangles its collision search kept per node at the end (0 without self-collision)."""
     model, solver, dt = square_on_sphere(nodes, self_collision, spacing)
     state, scratch, control = model.state(), model.state(), model.control()
     for _ in range(5):
@@ -64,7 +66,8 @@ def step_ms(nodes: int, steps: int, self_collision: bool, spacing: float | None 
         solver.step(state, scratch, control, dt)
         state, scratch = scratch, state
     wp.synchronize()
-    return model.node_count, solver.sweeps(dt), 1000.0 * (time.perf_counter() - start) / steps
+    kept = solver.collision.cloth_candidate_count.numpy().mean() if self_collision else 0.0
+    return model.node_count, solver.sweeps(dt), 1000.0 * (time.perf_counter() - start) / steps, float(kept)
 
 
 def main() -> None:
@@ -78,18 +81,19 @@ def main() -> None:
     args = parser.parse_args()
     if args.repeats < 1 or args.steps < 1:
         parser.error(f"--repeats and --steps must be at least 1, got {args.repeats} and {args.steps}")
-    rows, sweeps = [], []
+    rows, sweeps, kept = [], [], []
     for n in args.sizes:
         runs = [step_ms(n, args.steps, args.self_collision, args.spacing) for _ in range(args.repeats)]
-        rows.append((runs[0][0], min(ms for _, _, ms in runs)))
+        rows.append((runs[0][0], min(run[2] for run in runs)))
         sweeps.append(runs[0][1])
-    print(f"{'nodes':>8} {'sweeps':>6} {'ms/step':>9} {'per doubling vs linear':>24}")
+        kept.append(runs[0][3])
+    print(f"{'nodes':>8} {'sweeps':>6} {'kept/node':>9} {'ms/step':>9} {'per doubling vs linear':>24}")
     for k, (n, ms) in enumerate(rows):
         growth = ""
         if k:
             n0, ms0 = rows[k - 1]
             growth = f"{(ms / ms0) ** (np.log(2) / np.log(n / n0)) / 2.0:.2f}"
-        print(f"{n:>8} {sweeps[k]:>6} {ms:>9.2f} {growth:>24}")
+        print(f"{n:>8} {sweeps[k]:>6} {kept[k]:>9.1f} {ms:>9.2f} {growth:>24}")
     if len(rows) > 1:
         nodes, ms = np.log(np.array(rows, dtype=float)).T
         exponent = np.polyfit(nodes, ms, 1)[0]
