@@ -210,6 +210,17 @@ def test_passes_leaving_out_what_the_last_pass_left_as_it_was_end_bit_for_bit_as
     assert np.abs(np.diff(full[:, :model.node_count, 2], axis=0)).max() > 1e-4  # the layers move
 
 
+def two_layers(gap: float, broad_phase: str):
+    """Two 0.1 m squares of 1 cm net, ``gap`` [m] apart, no gravity, and a Collision() for them
+    without a body: the net, the model and the pipeline."""
+    net = rectangular_net(0.1, 0.1, 0.01)
+    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    for z in (0.0, gap):
+        b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.full(net.node_count, z)])
+    model = b.finalize("cpu")
+    return net, model, pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase=broad_phase))
+
+
 @pytest.mark.parametrize("broad_phase", ["intervals", "bvh"])
 def test_cloth_moving_as_a_whole_keeps_its_cloth_candidates(broad_phase):
     """Two layers 10 mm apart carried sideways and down at 1.34 m/s, 4.5 mm a step (beyond
@@ -217,12 +228,7 @@ def test_cloth_moving_as_a_whole_keeps_its_cloth_candidates(broad_phase):
     velocity changes; a node of the lower layer then moving 4 mm a step faster than the rest
     toward the upper one makes the next step search again, and the contact is found (its
     velocity changes before it reaches the upper layer)."""
-    net = rectangular_net(0.1, 0.1, 0.01)
-    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
-    for z in (0.0, 0.01):
-        b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.full(net.node_count, z)])
-    model = b.finalize("cpu")
-    collision = pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase=broad_phase))
+    net, model, collision = two_layers(0.01, broad_phase)
     state = model.state()
     dt = 1.0 / 300.0
     start = model.host["points"].astype(np.float32)
@@ -260,12 +266,7 @@ def test_a_second_collision_of_a_step_searches_again_only_where_a_step_left_the_
     (though the nodes moved beyond half the margin of where they were searched from); one
     whose steps now reach 30 mm, through the lower layer, searches again, and the layers end
     the step a thickness apart (reusing the candidates, the upper layer went through)."""
-    net = rectangular_net(0.1, 0.1, 0.01)
-    b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
-    for z in (0.0, 0.02):
-        b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.full(net.node_count, z)])
-    model = b.finalize("cpu")
-    collision = pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase=broad_phase))
+    net, model, collision = two_layers(0.02, broad_phase)
     state = model.state()
     dt = 1.0 / 300.0
     upper = np.arange(model.node_count) >= net.node_count
