@@ -109,7 +109,8 @@ class CollisionPipeline:
         self._settled = wp.zeros(n, dtype=int, device=dev)
         self._changed = wp.zeros(1, dtype=int, device=dev)
         self.searches = 0
-        self._flag = wp.ones(1, dtype=int, device=dev)
+        self._flags = wp.zeros(2, dtype=int, device=dev)
+        self._cloth_searched = False
         self._overflow = wp.zeros(1, dtype=int, device=dev)
         self._x_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._step_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
@@ -172,7 +173,7 @@ class CollisionPipeline:
         Repeats the search of the body's triangles and vertices for each node and cloth triangle
         that may have left the region searched for it last time, and that of the cloth's
         triangles, for every node, once some node may have moved so, beyond the motion common to
-        all nodes (:func:`~party.collision.cloth.moved_beyond`; this reads one flag from the
+        all nodes (:func:`~party.collision.cloth.moved_beyond`; this reads two flags from the
         device). ``continuing`` marks a second Collision() within one step (after the plastic
         limit): its candidates also serve a node whose step stays within half the margin of
         the box of the step they were searched for (:func:`~party.collision.body.covered`), and
@@ -200,11 +201,13 @@ class CollisionPipeline:
             self._search_body(x, v, state, dt, continuing)
         if self.has_cloth:
             self._motion.zero_()
+            self._flags.zero_()
             launch(sum_motion, dim=m.node_count, inputs=[x, v, self._x_ref, self._motion], device=dev)
             launch(moved_beyond, dim=m.node_count,
                    inputs=[x, v, self._x_ref, self._step_ref, self._motion, self._velocity_sum_ref,
-                           1.0 / m.node_count, dt, self.margin, int(continuing), self._flag], device=dev)
-            if int(self._flag.numpy()[0]):
+                           1.0 / m.node_count, dt, self.margin, int(continuing), self._flags], device=dev)
+            left = self._flags.numpy()
+            if not self._cloth_searched or (left[0] and (not continuing or left[1])):
                 self._search_cloth(x, v, dt)
         if self.has_cloth:
             launch_items(detect_cloth, 0, m.node_count,
@@ -323,7 +326,7 @@ class CollisionPipeline:
                       self._step_ref, self._overflow], dev)
         wp.copy(self._x_ref, x)
         wp.copy(self._velocity_sum_ref, self._motion, src_offset=1, count=1)
-        self._flag.zero_()
+        self._cloth_searched = True
 
     def _excluded_nodes(self) -> tuple[wp.array, wp.array]:
         """CSR (offsets, node ids) of the nodes whose triangles each node does not collide
