@@ -84,31 +84,29 @@ def main() -> None:
     for grid in args.grids:
         for self_collision in args.self_collision:
             scene = f"sphere-drop {grid}x{grid} self {self_collision}"
-            runs = {system: [] for system in args.systems}
-            for round_ in range(args.repeats):
-                for system in args.systems:
-                    print(f"{scene}: {system}{turn(round_, args.repeats)} ...", flush=True)
-                    runs[system].append(run_sphere(system, grid, self_collision == "on", args.seconds,
-                                                   args.peer_timeout))
-                    print(f"    {describe(runs[system][-1])}", flush=True)
-            rows += [{"scene": scene, "system": system, "self_collision": self_collision == "on",
-                      **median_run(results, "wall_per_simulated_second")} for system, results in runs.items()]
+            on = self_collision == "on"
+            rows += [{**row, "self_collision": on} for row in in_turns(
+                scene, args.systems, args.repeats, "wall_per_simulated_second",
+                lambda system: run_sphere(system, grid, on, args.seconds, args.peer_timeout))]
     if args.garments:
         for label, pattern, body in garment_scenes():
             drapers = [s for s in args.systems if s in ("party-implicit", "party-explicit")]
-            runs = {system: [] for system in drapers}
-            for round_ in range(args.repeats):
-                for system in drapers:
-                    print(f"{label}: {system}{turn(round_, args.repeats)} ...", flush=True)
-                    runs[system].append(run_drape(pattern, body, system.split("-")[1]))
-                    print(f"    {describe(runs[system][-1])}", flush=True)
-            rows += [{"scene": label, "system": system, **median_run(results, "wall_seconds_to_rest")}
-                     for system, results in runs.items()]
+            rows += in_turns(label, drapers, args.repeats, "wall_seconds_to_rest",
+                             lambda system: run_drape(pattern, body, system.split("-")[1]))
     report(rows, args.out)
 
 
-def turn(round_: int, repeats: int) -> str:
-    return f" (run {round_ + 1} of {repeats})" if repeats > 1 else ""
+def in_turns(scene: str, systems: list[str], repeats: int, key: str, run) -> list[dict]:
+    """``run(system)`` for each of ``systems`` in turn, ``repeats`` rounds, printing each result;
+    one row per system for ``scene``, its time ``key`` the median (:func:`median_run`)."""
+    runs = {system: [] for system in systems}
+    for round_ in range(repeats):
+        for system in systems:
+            turn = f" (run {round_ + 1} of {repeats})" if repeats > 1 else ""
+            print(f"{scene}: {system}{turn} ...", flush=True)
+            runs[system].append(run(system))
+            print(f"    {describe(runs[system][-1])}", flush=True)
+    return [{"scene": scene, "system": system, **median_run(results, key)} for system, results in runs.items()]
 
 
 def median_run(results: list[dict], key: str) -> dict:
