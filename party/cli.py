@@ -10,7 +10,7 @@ from rich.console import Console
 
 from .errors import InvalidInput, PartyError
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
+app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                   help="PARTY dress simulator: the paper's experiments and garment draping.")
 err = Console(stderr=True)
 out = Console()
