@@ -115,3 +115,12 @@ def test_resume_continues_where_it_stopped(tmp_path):
     a = trimesh.load(tmp_path / "frames" / "frame_000004.ply", process=False).vertices
     b = trimesh.load(tmp_path / "fresh" / "frames" / "frame_000004.ply", process=False).vertices
     assert np.allclose(a, b, atol=1e-6)
+
+
+def test_help_gives_the_units_of_each_quantity():
+    """Brackets in help texts are units, not markup: `[s]` once vanished as a style tag."""
+    result = party("run", "--help")
+    assert result.returncode == 0
+    text = " ".join(result.stdout.split())
+    for phrase in ("Node spacing of the net [m]", "Time step [s]", "Wind speed [m/s]"):
+        assert phrase in text, phrase
