@@ -15,6 +15,9 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=N
 err = Console(stderr=True)
 out = Console()
 
+OPEN_SEAM_MM = 1.0
+"""A seam gap [mm] beyond which ``party drape`` warns (the sewing closes seams to 0.5 mm)."""
+
 
 @app.command("scenes")
 def scenes_command() -> None:
@@ -120,6 +123,10 @@ def drape_command(
         out.print(f"[yellow]tight: sewn up to {summary['max_sewn_elongation']:.2f} times rest length, beyond "
                   f"{the_fabric.name}'s limit of {1.0 + the_fabric.strain_limit:.2f}; the pattern is smaller than "
                   "this body there, and the cloth keeps that stretch[/]")
+    if summary["max_seam_gap_mm"] > OPEN_SEAM_MM:
+        seam, gap = max(summary["seam_gaps_mm"].items(), key=lambda item: item[1])
+        out.print(f"[yellow]open seam: {seam} was still {gap:.1f} mm apart when the sewing stopped, and the garment "
+                  "was joined across it[/]", highlight=False)
     relaxation = summary["relaxation"]
     if summary["solver"] == "explicit":
         out.print(f"relaxed: energy settled in {relaxation['draping_steps']} iterations" if relaxation["at_rest"] else
