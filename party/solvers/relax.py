@@ -106,6 +106,7 @@ class SolverRelax:
                         result.converged = True
                         break
         result.iterations = it
+        self.stepper.end.flush(current)  # a crossing check the guard's interval left pending
         if current is not state:
             state.assign(current)
         return result
