@@ -34,6 +34,7 @@ import numpy as np
 
 from ..body.load import load_body
 from ..body.probe import ColliderProbe
+from ..collision import CollisionSettings
 from ..errors import SimulationUnstable
 from ..fabric import Fabric
 from ..garment.assemble import assemble
@@ -42,7 +43,6 @@ from ..output.garment_export import write_garment
 from ..output.metrics import body_vertices_through, cloth_crossings, max_elongation
 from ..pattern import load_pattern
 from ..model import Model
-from ..collision import CollisionSettings
 from ..solvers.relax import SolverRelax, total_energy
 from ..solvers.select import guard_every
 from ..solvers.settle import DRAPE_SWEEPS, Settled, settle
@@ -167,8 +167,8 @@ def _relax_kinetically(model: Model, progress: bool) -> tuple[Settled, list[tupl
     kinetic damping) until the energy settles (to 0.2 % over 300 iterations) or
     :data:`EXPLICIT_ITERATIONS`, the crossing guard checking every 1/300 s of its steps, as in
     ``party run dress``, and once more when it stops (GarmentCode's tshirt in denim ended with 9
-    crossings without the guard, 4 without that last check, none with both); returns the outcome (``at_rest``: the energy settled) and the energy log [J] against
-    the iteration."""
+    crossings without the guard, 4 without that last check, none with both); returns the
+    outcome (``at_rest``: the energy settled) and the energy log [J] against the iteration."""
     state = model.state()
     dt = relax_time_step(model, "explicit")
     with relax_progress("draping", EXPLICIT_ITERATIONS, progress) as on_log:
