@@ -92,16 +92,18 @@ def apply_pushes(points: wp.array(dtype=wp.vec3), push: wp.array(dtype=wp.vec3),
 def edge_opposites(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct edges of ``triangles`` (:func:`~party.meshing.net.triangle_edges`) and,
     per edge, the third nodes of up to two of its triangles (-1 where it has fewer), (e, 2)."""
-    edges = triangle_edges(triangles)
+    tris = np.asarray(triangles, np.int64)
+    edges = triangle_edges(tris)
+    sides = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    thirds = np.concatenate([tris[:, 2], tris[:, 0], tris[:, 1]])
+    base = int(edges.max()) + 1
+    edge_of_side = np.searchsorted(edges[:, 0] * base + edges[:, 1], sides[:, 0] * base + sides[:, 1])
+    order = np.argsort(edge_of_side, kind="stable")
+    ranked = edge_of_side[order]
+    slot = np.arange(len(ranked)) - np.searchsorted(ranked, ranked)  # 0 for an edge's first face, 1 for its second
+    keep = slot < 2
     opposite = -np.ones((len(edges), 2), dtype=np.int32)
-    index = {tuple(e): j for j, e in enumerate(edges.tolist())}
-    for tri in np.asarray(triangles).tolist():
-        for s in range(3):
-            a, b, c = tri[s], tri[(s + 1) % 3], tri[(s + 2) % 3]
-            j = index[(min(a, b), max(a, b))]
-            slot = 0 if opposite[j, 0] < 0 else 1
-            if opposite[j, slot] < 0:
-                opposite[j, slot] = c
+    opposite[ranked[keep], slot[keep]] = thirds[order][keep]
     return edges, opposite
 
 
