@@ -14,8 +14,8 @@ made while sewing would stay in the garment, since collision response keeps each
 side of a layer it is on: before the joined garment relaxes with cloth-cloth collision on, the
 crossings are undone (:func:`party.collision.untangle.untangle`). GarmentCode's tshirt at 20 mm
 was sewn with 15 in denim and 14 in silk, each where a sleeve panel had folded through itself at
-the armpit; untangling moved 29 of denim's nodes, by up to 8 mm. ``party drape`` and ``party run
-dress`` count the crossings of every result they write.
+the armpit; untangling the denim one moved nodes by up to 8 mm. ``party drape`` and ``party
+run dress`` count the crossings of every result they write.
 """
 
 from __future__ import annotations
