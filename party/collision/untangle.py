@@ -131,8 +131,8 @@ def untangle(points: np.ndarray, triangles: np.ndarray, free: np.ndarray | None 
         count.zero_()
         launch(contour_pushes, dim=len(edges), inputs=[mesh.id, pts, tris, edge_array, opposite_array, push, count],
                device=device)
-        if int(count.numpy()[0]) == 0 or iteration == iterations:
+        left = int(count.numpy()[0])
+        if left == 0 or iteration == iterations:
             break
         launch(apply_pushes, dim=len(points), inputs=[pts, push, free_array, step], device=device)
-    moved = pts.numpy() - start
-    return np.asarray(points, np.float64) + moved, int(count.numpy()[0])
+    return np.asarray(points, np.float64) + (pts.numpy() - start), left

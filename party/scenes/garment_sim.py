@@ -139,13 +139,11 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     dt = relax_time_step(model, "explicit")
     state = model.state()
     sewing = SolverRelax(model, collision=SEWING_COLLISION, max_speed=4.0, momentum=MOMENTUM)
-    with relax_progress("sewing", max_iterations, progress) as on_log:
-        result = sewing.relax(state, dt, max_iterations=max_iterations, min_iterations=min(400, max_iterations),
-                              on_log=on_log)
-    for _ in range(SEWING_ROUNDS - 1):
-        if result.converged or _largest_gap(state.positions(), pairs) <= OPEN_GAP:
+    result = RelaxResult()
+    for round_ in range(SEWING_ROUNDS):
+        if round_ and (result.converged or _pair_gaps(state.positions(), pairs).max(initial=0.0) <= OPEN_GAP):
             break
-        with relax_progress("sewing on", max_iterations, progress) as on_log:
+        with relax_progress("sewing" if round_ == 0 else "sewing on", max_iterations, progress) as on_log:
             more = sewing.relax(state, dt, max_iterations=max_iterations, min_iterations=min(400, max_iterations),
                                 on_log=on_log)
         result.energy += [(result.iterations + it, e) for it, e in more.energy]
@@ -162,8 +160,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
                 state, dt, max_iterations=steps, min_iterations=min(100, steps), on_log=on_log)
         result.iterations += closed.iterations
     points = _finite(state.positions())
-    sp = garment.seam_pairs
-    pair_gap = np.linalg.norm(points[sp[:, 0]] - points[sp[:, 1]], axis=1)
+    pair_gap = _pair_gaps(points, garment.seam_pairs)
     seam_gaps = np.zeros(len(garment.pattern.seams))
     np.maximum.at(seam_gaps, garment.seam_of_pair, pair_gap)
     merged = np.zeros((net.node_count, 3))
@@ -202,9 +199,9 @@ def relax_time_step(model: Model, solver: str) -> float:
     return 0.9 * critical_time_step(model) if solver == "explicit" else DEFAULT_DT["implicit"]
 
 
-def _largest_gap(points: np.ndarray, pairs: np.ndarray) -> float:
-    """Largest distance [m] between the nodes of a sewing pair."""
-    return float(np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1).max()) if len(pairs) else 0.0
+def _pair_gaps(points: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Distance [m] between the two nodes of each of ``pairs`` (p, 2)."""
+    return np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
 
 
 def _finite(points: np.ndarray) -> np.ndarray:
