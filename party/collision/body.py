@@ -154,6 +154,7 @@ def collide_body(
     dt: float,
     settled: wp.array(dtype=int),
     touched: wp.array(dtype=int),
+    contact_face: wp.array(dtype=int),
 ):
     """One detection-and-response pass for each free node over its candidate triangles.
 
@@ -166,7 +167,9 @@ def collide_body(
     normal so that the step ends at eps (a position correction, adding no velocity).
 
     Skips a node left ``settled`` by the last pass and not ``touched`` by this one (see
-    :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes.
+    :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes. The
+    face of the contact goes to ``contact_face`` (the implicit solver's next solve keeps the
+    node on its side of that face's plane).
     """
     i = first + wp.tid()
     if inv_mass[i] == 0.0 or unchanged(i, settled, touched):
@@ -207,6 +210,7 @@ def collide_body(
     if best_face < 0:
         return
 
+    contact_face[i] = best_face
     fa = faces[best_face, 0]
     fb = faces[best_face, 1]
     fc = faces[best_face, 2]

@@ -52,6 +52,28 @@ def inertial_target(
         disp[i] = start
 
 
+@wp.kernel
+def body_planes(contact_face: wp.array(dtype=int), faces: wp.array(dtype=int, ndim=2),
+                body_q: wp.array(dtype=wp.vec3), body_qd: wp.array(dtype=wp.vec3),
+                thickness: wp.array(dtype=float), dt: float, normal: wp.array(dtype=wp.vec3),
+                offset: wp.array(dtype=float)):
+    """The plane each node must stay on the outer side of over this step (ours; VBD puts its
+    contacts in the solve likewise): n . x >= offset, where the last Collision() found the node
+    in contact with a body face, n the face's normal and offset its plane at the step's end
+    (moved by the body's velocity) plus eps [m]; n = 0 where it found none."""
+    i = wp.tid()
+    f = contact_face[i]
+    if f < 0:
+        normal[i] = wp.vec3(0.0)
+        offset[i] = 0.0
+        return
+    a = body_q[faces[f, 0]]
+    n = wp.normalize(wp.cross(body_q[faces[f, 1]] - a, body_q[faces[f, 2]] - a))
+    vb = (body_qd[faces[f, 0]] + body_qd[faces[f, 1]] + body_qd[faces[f, 2]]) / 3.0
+    normal[i] = n
+    offset[i] = wp.dot(a + vb * dt, n) + thickness[i]
+
+
 @wp.func
 def moved(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: int, i: int) -> wp.vec3:
     """x_k - x_i at the iterate, (x_k(t) - x_i(t)) + (d_k - d_i) [m]: both differences of
@@ -143,6 +165,8 @@ class DescentTerms:
     hinge_friction: wp.array(dtype=float)
     hinge_slip_limit: wp.array(dtype=float)
     slip_world: wp.array(dtype=wp.vec3)
+    plane_normal: wp.array(dtype=wp.vec3)
+    plane_offset: wp.array(dtype=float)
 
 
 @wp.func
@@ -166,6 +190,10 @@ def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), 
     + the node's corner) add K_i times their returned moment
     (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the step's start in
     ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
+
+    A node that the last Collision() found against the body steps to the minimum of its
+    quadratic model on the outer side of that face's plane (``plane_*``, :func:`body_planes`):
+    the Newton step, moved along H^-1 n until n . x reaches the plane where it ended behind it.
     """
     if terms.inv_mass[i] == 0.0:
         return
@@ -214,7 +242,13 @@ def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), 
     hess += diagonal * wp.identity(n=3, dtype=float)
     det = wp.determinant(hess)
     if det > 1.0e-20:
-        disp[i] = di - wp.inverse(hess) * grad
+        inverse = wp.inverse(hess)
+        d_new = di - inverse * grad
+        n = terms.plane_normal[i]
+        gap = terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(d_new, n)
+        if gap > 0.0:
+            d_new += (gap / wp.dot(n, inverse * n)) * (inverse * n)
+        disp[i] = d_new
 
 
 @wp.kernel

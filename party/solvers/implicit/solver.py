@@ -17,7 +17,7 @@ from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
-from .kernels import (DescentTerms, block_descent, chebyshev_blend, inertial_target, record_correction,
+from .kernels import (DescentTerms, block_descent, body_planes, chebyshev_blend, inertial_target, record_correction,
                       step_velocity, sweep_workers)
 
 
@@ -104,6 +104,9 @@ class SolverImplicit:
         self._d_previous = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._d_before = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._correction = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._plane_normal = wp.zeros(n, dtype=wp.vec3, device=dev)
+        self._plane_offset = wp.zeros(n, dtype=float, device=dev)
+        self._planes = self.collision is not None and self.collision.has_body
         self.chebyshev = float(chebyshev)
         offsets, other, params = node_springs(model)
         self._spring_offsets = wp.array(offsets, dtype=int, device=dev)
@@ -230,6 +233,11 @@ class SolverImplicit:
             launch(slip_in_world, dim=m.hinge_count,
                    inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
                    device=dev)
+        if self._planes:
+            launch(body_planes, dim=m.node_count,
+                   inputs=[self.collision.body_contact_face, m.collider_faces, state_in.collider_q,
+                           state_in.collider_qd, m.node_thickness, dt], outputs=[self._plane_normal, self._plane_offset],
+                   device=dev)
         wp.copy(self._d_before, self._d)
         if self.workers > 1:
             launch_workers(sweep_workers, self.workers, self._sync,
@@ -277,6 +285,7 @@ class SolverImplicit:
         terms.hinge_nodes, terms.hinge_weights = m.hinge_nodes, m.hinge_weights
         terms.hinge_friction, terms.hinge_slip_limit = m.hinge_friction, m.hinge_slip_limit
         terms.slip_world = self._slip_world
+        terms.plane_normal, terms.plane_offset = self._plane_normal, self._plane_offset
         return terms
 
 
