@@ -155,6 +155,7 @@ def collide_body(
     settled: wp.array(dtype=int),
     touched: wp.array(dtype=int),
     contact_face: wp.array(dtype=int),
+    solve_push: wp.array(dtype=wp.vec3),
 ):
     """One detection-and-response pass for each free node over its candidate triangles.
 
@@ -169,13 +170,20 @@ def collide_body(
     Skips a node left ``settled`` by the last pass and not ``touched`` by this one (see
     :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes. The
     face of the contact goes to ``contact_face`` (the implicit solver's next solve keeps the
-    node on its side of that face's plane).
+    node on its side of that face's plane). ``solve_push`` [m/s] is the velocity that plane's
+    reaction gave the node in the solve (:func:`~party.solvers.implicit.kernels.descend_node`):
+    the first pass finds the contact with the node's velocity without it, as the node would
+    have struck the body, and the friction cone takes it as normal impulse (not the bounce); it
+    is used once and cleared.
     """
     i = first + wp.tid()
     if inv_mass[i] == 0.0 or unchanged(i, settled, touched):
         return
     x0 = x[i]
-    vi = v[i]
+    v_given = v[i]
+    push = solve_push[i]
+    vi = v_given - push
+    solve_push[i] = wp.vec3(0.0)
     eps = thickness[i]
     best_t = float(2.0)
     best_s1 = float(1.0e30)
@@ -221,11 +229,11 @@ def collide_body(
     if wp.dot(n, nf) <= 0.0:
         n = nf
     vbody = interpolate(best_w, body_qd[fa], body_qd[fb], body_qd[fc])
-    vnew = friction_restitution_response(vi - vbody, n, friction[i], restitution[i]) + vbody
+    vnew = friction_restitution_response(v_given - vbody, n, friction[i], restitution[i], wp.dot(push, n)) + vbody
     s_end = wp.dot(x0 - a, nf) + wp.dot(vnew - vbody, nf) * dt
     if s_end < eps:
         x[i] = x0 + (eps - s_end) * nf
         touched[i] = 1
-    if differs(vnew, vi):
+    if differs(vnew, v_given):
         touched[i] = 1
     v[i] = vnew

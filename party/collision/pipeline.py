@@ -130,6 +130,7 @@ class CollisionPipeline:
             self._body_step_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.body_face_count = wp.zeros(n, dtype=int, device=dev)
             self.body_contact_face = wp.full(n, -1, dtype=int, device=dev)
+            self.body_solve_push = wp.zeros(n, dtype=wp.vec3, device=dev)
             self._body_built = False
         self.has_body_vertices = self.has_body and settings.body_vertices and model.triangle_count > 0
         if self.has_body_vertices:
@@ -220,8 +221,6 @@ class CollisionPipeline:
                    inputs=[self._touched, changed, self._searched_again, contacts, self._settled], device=dev)
         else:
             self._settled.zero_()
-        if self.has_body and not continuing:
-            self.body_contact_face.fill_(-1)
         self._touched.zero_()
         passes = max(self.settings.passes, 1) if self.has_cloth else 1
         for k in range(passes):
@@ -265,7 +264,7 @@ class CollisionPipeline:
         launch_items(collide_body, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution, state.collider_q,
                       state.collider_qd, m.collider_normals, m.collider_faces, self.body_faces, self.body_face_count, dt,
-                      self._settled, self._touched, self.body_contact_face], m.device)
+                      self._settled, self._touched, self.body_contact_face, self.body_solve_push], m.device)
 
     def _search_body(self, x: wp.array, v: wp.array, state: State, dt: float, continuing: bool) -> None:
         """Search the body's triangles (and vertices) again for the nodes (cloth triangles) that

@@ -3,6 +3,7 @@ potential (Chen, Macklin, Macklin, Yuksel, Kim: "Vertex Block Descent", SIGGRAPH
 
 import warp as wp
 
+from ...collision.geometry import closest_point_barycentric, interpolate
 from ...launch import WorkerSync, worker_barrier
 from ..hysteresis import slider_moment
 
@@ -16,6 +17,7 @@ def inertial_target(
     gravity: wp.vec3,
     kinematic_velocity: wp.array(dtype=wp.vec3),
     previous_correction: wp.array(dtype=wp.vec3),
+    plane_normal: wp.array(dtype=wp.vec3),
     dt: float,
     y: wp.array(dtype=wp.vec3),
     disp: wp.array(dtype=wp.vec3),
@@ -35,8 +37,12 @@ def inertial_target(
     adaptive start). A falling or sliding node starts at y, which is exact for it; a node the
     cloth holds up starts where it is. A solve cut short then leaves cloth at rest in
     equilibrium: starting every node at y leaves part of the weight's dt^2 push in each
-    unfinished solve, and cloth held up by its own stiffness hangs as if heavier. Kinematic nodes move
-    with the control's velocity and stay there."""
+    unfinished solve, and cloth held up by its own stiffness hangs as if heavier. A node held
+    by a body plane (:func:`body_planes`) starts at y: the plane holds it, and on a slope a
+    start moved back along gravity would also hold back its slide, which the sweeps, stiff in
+    the cloth's plane, do not restore within a step (a patch on a 40 degree slope of mu 0.6
+    slid 6 % slower than g (sin - mu cos)). Kinematic nodes move with the control's velocity
+    and stay there."""
     i = wp.tid()
     if inv_mass[i] == 0.0:
         y[i] = kinematic_velocity[i] * dt
@@ -45,33 +51,56 @@ def inertial_target(
         y[i] = v[i] * dt + (gravity + f_ext[i] * inv_mass[i]) * dt * dt
         start = y[i]
         g = wp.length(gravity)
-        if g > 0.0:
+        if g > 0.0 and wp.length_sq(plane_normal[i]) == 0.0:
             down = gravity / g
             back = wp.clamp(wp.dot(previous_correction[i], down), -g * dt * dt, 0.0)
             start = start + back * down
         disp[i] = start
 
 
+PLANE_CONTACT = wp.constant(1.0e-4)
+"""How far [m] above its body plane a node still counts as resting on it (:func:`plane_reactions`):
+the sweeps leave a node the plane held a few microns off it, and a node given no reaction is
+given no friction either (1 um: GarmentCode's hoody slid on the body and did not come to rest)."""
+
+
 @wp.kernel
 def body_planes(contact_face: wp.array(dtype=int), faces: wp.array(dtype=int, ndim=2),
-                body_q: wp.array(dtype=wp.vec3), body_qd: wp.array(dtype=wp.vec3),
+                body_q: wp.array(dtype=wp.vec3), body_qd: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3),
                 thickness: wp.array(dtype=float), dt: float, normal: wp.array(dtype=wp.vec3),
-                offset: wp.array(dtype=float)):
+                offset: wp.array(dtype=float), push: wp.array(dtype=wp.vec3)):
     """The plane each node must stay on the outer side of over this step (ours; VBD puts its
     contacts in the solve likewise): n . x >= offset, where the last Collision() found the node
-    in contact with a body face, n the face's normal and offset its plane at the step's end
-    (moved by the body's velocity) plus eps [m]; n = 0 where it found none."""
+    in contact with a body face. It is the plane tangent to the surface eps [m] off that face
+    where the node starts the step: n points from the face's point nearest the node to the node
+    (the face's normal where the node lies over the face, or behind it), and offset is n . p + eps
+    with p that point moved by the body's velocity over the step. Over a rim or an edge, n turns
+    round it with the node, so that the plane does not hold a node that has left the face out
+    over the face's extension. n = 0 where it found none. Clears ``push``."""
     i = wp.tid()
+    push[i] = wp.vec3(0.0)
     f = contact_face[i]
     if f < 0:
         normal[i] = wp.vec3(0.0)
         offset[i] = 0.0
         return
     a = body_q[faces[f, 0]]
-    n = wp.normalize(wp.cross(body_q[faces[f, 1]] - a, body_q[faces[f, 2]] - a))
-    vb = (body_qd[faces[f, 0]] + body_qd[faces[f, 1]] + body_qd[faces[f, 2]]) / 3.0
+    b = body_q[faces[f, 1]]
+    c = body_q[faces[f, 2]]
+    w = closest_point_barycentric(x[i], a, b, c)
+    p = interpolate(w, a, b, c)
+    n = wp.normalize(wp.cross(b - a, c - a))
+    away = x[i] - p
+    if wp.dot(away, n) > 0.0 and wp.length(away) > 0.0:
+        n = wp.normalize(away)
+    if wp.length(away) > 2.0 * thickness[i]:
+        contact_face[i] = -1
+        normal[i] = wp.vec3(0.0)
+        offset[i] = 0.0
+        return
+    vb = interpolate(w, body_qd[faces[f, 0]], body_qd[faces[f, 1]], body_qd[faces[f, 2]])
     normal[i] = n
-    offset[i] = wp.dot(a + vb * dt, n) + thickness[i]
+    offset[i] = wp.dot(p + vb * dt, n) + thickness[i]
 
 
 @wp.func
@@ -91,11 +120,13 @@ def moved_curvature(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.ve
 
 
 @wp.kernel
-def record_correction(disp: wp.array(dtype=wp.vec3), y: wp.array(dtype=wp.vec3),
-                      correction: wp.array(dtype=wp.vec3)):
-    """The solve's correction d - y to the inertial target [m], for the next step's start."""
+def record_correction(disp: wp.array(dtype=wp.vec3), y: wp.array(dtype=wp.vec3), push: wp.array(dtype=wp.vec3),
+                      dt: float, correction: wp.array(dtype=wp.vec3)):
+    """The solve's correction d - y to the inertial target [m], for the next step's start, less
+    what a body plane's reaction gave it (``push`` [m/s] over ``dt``): a node that leaves the
+    body starts from where the cloth, not the body, held it."""
     i = wp.tid()
-    correction[i] = disp[i] - y[i]
+    correction[i] = disp[i] - y[i] - push[i] * dt
 
 
 @wp.struct
@@ -167,36 +198,20 @@ class DescentTerms:
     slip_world: wp.array(dtype=wp.vec3)
     plane_normal: wp.array(dtype=wp.vec3)
     plane_offset: wp.array(dtype=float)
+    plane_push: wp.array(dtype=wp.vec3)
+
+
+@wp.struct
+class NodeStep:
+    """A node's gradient [N] and Hessian block [N/m] of the incremental potential at the iterate."""
+    grad: wp.vec3
+    hess: wp.mat33
 
 
 @wp.func
-def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
-                 disp: wp.array(dtype=wp.vec3)):
-    """One Newton step on one node's share of the incremental potential, in the node's
-    displacement d_i = x_i - x_i(t) (``disp``; see :func:`inertial_target`),
-
-        G_i(d_i) = m_i / (2 dt^2) |d_i - y_i|^2 + E_springs + E_dampers + E_hinges,
-
-    the other nodes held (nodes of one colour share no element or hinge, so a colour runs in
-    parallel). ``spring_*`` lists each node's elements: the other node and (l0 [m], k [N/m],
-    c [kg/s]). Springs contribute k (l - l0) d and the Hessian k (d d^T + max(0, 1 - l0/l)
-    (I - d d^T)) (projected to be positive semi-definite); the paper's dampers
-    c (v_k - v_i) with v = (x - x(t)) / dt contribute c / dt I. The hinges' energy is the
-    quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h K_h K_h^T
-    (``bend_*``: row i of L, its diagonal included; its rows sum to zero), so they add
-    (L x)_i = sum_j L_ij (x_j - x_i) to the gradient and L_ii I to the Hessian. Membrane
-    triangles add their St. Venant-Kirchhoff terms (:func:`membrane_gradient`). Bending
-    hysteresis's elements (``slider_*``: each node's stencils with a slider, entries stencil * 4
-    + the node's corner) add K_i times their returned moment
-    (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the step's start in
-    ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
-
-    A node that the last Collision() found against the body steps to the minimum of its
-    quadratic model on the outer side of that face's plane (``plane_*``, :func:`body_planes`):
-    the Newton step, moved along H^-1 n until n . x reaches the plane where it ended behind it.
-    """
-    if terms.inv_mass[i] == 0.0:
-        return
+def node_terms(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
+               disp: wp.array(dtype=wp.vec3)) -> NodeStep:
+    """The gradient and Hessian block that :func:`descend_node` steps on."""
     di = disp[i]
     h2 = dt * dt
     m = terms.mass[i]
@@ -240,15 +255,87 @@ def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), 
         grad += weight * slider_moment(curvature, terms.slip_world[h], friction, terms.hinge_slip_limit[h])
         diagonal += friction * weight * weight
     hess += diagonal * wp.identity(n=3, dtype=float)
+    result = NodeStep()
+    result.grad = grad
+    result.hess = hess
+    return result
+
+
+@wp.func
+def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
+                 disp: wp.array(dtype=wp.vec3)):
+    """One Newton step on one node's share of the incremental potential, in the node's
+    displacement d_i = x_i - x_i(t) (``disp``; see :func:`inertial_target`),
+
+        G_i(d_i) = m_i / (2 dt^2) |d_i - y_i|^2 + E_springs + E_dampers + E_hinges,
+
+    the other nodes held (nodes of one colour share no element or hinge, so a colour runs in
+    parallel). ``spring_*`` lists each node's elements: the other node and (l0 [m], k [N/m],
+    c [kg/s]). Springs contribute k (l - l0) d and the Hessian k (d d^T + max(0, 1 - l0/l)
+    (I - d d^T)) (projected to be positive semi-definite); the paper's dampers
+    c (v_k - v_i) with v = (x - x(t)) / dt contribute c / dt I. The hinges' energy is the
+    quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h K_h K_h^T
+    (``bend_*``: row i of L, its diagonal included; its rows sum to zero), so they add
+    (L x)_i = sum_j L_ij (x_j - x_i) to the gradient and L_ii I to the Hessian. Membrane
+    triangles add their St. Venant-Kirchhoff terms (:func:`membrane_gradient`). Bending
+    hysteresis's elements (``slider_*``: each node's stencils with a slider, entries stencil * 4
+    + the node's corner) add K_i times their returned moment
+    (:func:`~party.solvers.hysteresis.slider_moment`, with c_slip at the step's start in
+    ``slip_world``) and friction K_i^2 I, a bound on their Hessian.
+
+    A node that the last Collision() found against the body steps to the minimum of its
+    quadratic model on the outer side of that face's plane (``plane_*``, :func:`body_planes`):
+    the Newton step, moved along H^-1 n until n . x reaches the plane where it ended behind it
+    (:func:`plane_reactions` gives the plane's reaction after the sweeps).
+    """
+    if terms.inv_mass[i] == 0.0:
+        return
+    step = node_terms(i, terms, x_start, dt, disp)
+    grad = step.grad
+    hess = step.hess
+    di = disp[i]
     det = wp.determinant(hess)
     if det > 1.0e-20:
         inverse = wp.inverse(hess)
         d_new = di - inverse * grad
         n = terms.plane_normal[i]
         gap = terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(d_new, n)
-        if gap > 0.0:
+        if wp.length_sq(n) > 0.0 and gap > 0.0:
             d_new += (gap / wp.dot(n, inverse * n)) * (inverse * n)
         disp[i] = d_new
+
+
+@wp.kernel
+def onto_planes(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3)):
+    """After the sweeps (the Chebyshev blend may have moved a node behind its body plane):
+    each node behind its plane moved along n onto it."""
+    i = wp.tid()
+    n = terms.plane_normal[i]
+    if terms.inv_mass[i] == 0.0 or wp.length_sq(n) == 0.0:
+        return
+    gap = terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(disp[i], n)
+    if gap > 0.0:
+        disp[i] = disp[i] + gap * n
+
+
+@wp.kernel
+def plane_reactions(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
+                    disp: wp.array(dtype=wp.vec3)):
+    """The reaction of each node's body plane at the solve's end, lambda = n . grad G_i [N]
+    where the node lies on the plane (within :data:`PLANE_CONTACT`) and grad G_i presses it into the plane (a
+    node held by the plane at the minimum has grad G_i = lambda n; over a uniformly pressed
+    patch the lambdas sum to its weight's normal part, the internal forces cancelling), as
+    the velocity lambda dt / m along n that it gave the node, into ``plane_push``, for the
+    body response's friction (:func:`~party.collision.body.collide_body`)."""
+    i = wp.tid()
+    n = terms.plane_normal[i]
+    if terms.inv_mass[i] == 0.0 or wp.length_sq(n) == 0.0:
+        return
+    gap = terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(disp[i], n)
+    if gap < -PLANE_CONTACT:
+        return
+    reaction = wp.max(wp.dot(n, node_terms(i, terms, x_start, dt, disp).grad), 0.0)
+    terms.plane_push[i] = (reaction * dt / terms.mass[i]) * n
 
 
 @wp.kernel
@@ -281,7 +368,7 @@ def sweep_workers(worker: int, workers: int, sync: WorkerSync, iterations: int,
                 if iteration == 0:
                     disp_previous[i] = disp[i]
                 else:
-                    blend_node(i, disp, disp_previous, disp_before, omegas[iteration])
+                    blend_node(i, disp, disp_previous, disp_before, omegas[iteration], terms.plane_normal)
             worker_barrier(sync, workers)
 
 
@@ -296,18 +383,23 @@ def step_velocity(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3
 
 @wp.kernel
 def chebyshev_blend(x: wp.array(dtype=wp.vec3), previous: wp.array(dtype=wp.vec3), before: wp.array(dtype=wp.vec3),
-                    omega: float):
+                    omega: float, plane_normal: wp.array(dtype=wp.vec3)):
     """Chebyshev semi-iterative acceleration of the sweeps (Wang 2015; used by VBD):
     :func:`blend_node` for every node."""
-    blend_node(wp.tid(), x, previous, before, omega)
+    blend_node(wp.tid(), x, previous, before, omega, plane_normal)
 
 
 @wp.func
 def blend_node(i: int, x: wp.array(dtype=wp.vec3), previous: wp.array(dtype=wp.vec3),
-               before: wp.array(dtype=wp.vec3), omega: float):
+               before: wp.array(dtype=wp.vec3), omega: float, plane_normal: wp.array(dtype=wp.vec3)):
     """x_k <- omega (x_k - x_{k-2}) + x_{k-2}; then shift the history (``previous`` = x_{k-1}
-    becomes x_{k-2} in ``before``, and x_k becomes ``previous``)."""
+    becomes x_{k-2} in ``before``, and x_k becomes ``previous``). Along the normal of a node's
+    body plane (:func:`body_planes`) x_k is kept as the sweep left it: extrapolated, a node
+    that a sweep brought onto the plane from behind it would leave the plane outwards, lose
+    its contact and its friction, and fall back in the next step."""
     xk = omega * (x[i] - before[i]) + before[i]
+    n = plane_normal[i]
+    xk += wp.dot(x[i] - xk, n) * n
     x[i] = xk
     before[i] = previous[i]
     previous[i] = xk

@@ -17,8 +17,8 @@ from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
-from .kernels import (DescentTerms, block_descent, body_planes, chebyshev_blend, inertial_target, record_correction,
-                      step_velocity, sweep_workers)
+from .kernels import (DescentTerms, block_descent, body_planes, chebyshev_blend, inertial_target, onto_planes,
+                      plane_reactions, record_correction, step_velocity, sweep_workers)
 
 
 SLIDER_STEP_RATIO = 600.0
@@ -226,17 +226,18 @@ class SolverImplicit:
         thread instead, and nothing is recorded: a CPU graph replays on one thread."""
         m = self.model
         dev = m.device
-        launch(inertial_target, dim=m.node_count,
-               inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
-                       control.kinematic_velocity, self._correction, dt], outputs=[self._y, self._d], device=dev)
-        if self._sliding:
-            launch(slip_in_world, dim=m.hinge_count,
-                   inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
-                   device=dev)
         if self._planes:
             launch(body_planes, dim=m.node_count,
                    inputs=[self.collision.body_contact_face, m.collider_faces, state_in.collider_q,
-                           state_in.collider_qd, m.node_thickness, dt], outputs=[self._plane_normal, self._plane_offset],
+                           state_in.collider_qd, state_in.node_q, m.node_thickness, dt],
+                   outputs=[self._plane_normal, self._plane_offset, self.collision.body_solve_push], device=dev)
+        launch(inertial_target, dim=m.node_count,
+               inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
+                       control.kinematic_velocity, self._correction, self._plane_normal, dt],
+               outputs=[self._y, self._d], device=dev)
+        if self._sliding:
+            launch(slip_in_world, dim=m.hinge_count,
+                   inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
                    device=dev)
         wp.copy(self._d_before, self._d)
         if self.workers > 1:
@@ -245,7 +246,11 @@ class SolverImplicit:
                             state_in.node_q, dt, self._d, self._d_previous, self._d_before], dev)
         else:
             self._sweep_by_colour(state_in.node_q, dt)
-        launch(record_correction, dim=m.node_count, inputs=[self._d, self._y, self._correction], device=dev)
+        if self._planes:
+            launch(onto_planes, dim=m.node_count, inputs=[self._terms, state_in.node_q, self._d], device=dev)
+            launch(plane_reactions, dim=m.node_count, inputs=[self._terms, state_in.node_q, dt, self._d], device=dev)
+        launch(record_correction, dim=m.node_count, inputs=[self._d, self._y, self._terms.plane_push, dt, self._correction],
+               device=dev)
         launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._d, dt],
                outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
@@ -266,7 +271,8 @@ class SolverImplicit:
                 wp.copy(self._d_previous, self._d)
                 continue
             launch(chebyshev_blend, dim=self.model.node_count,
-                   inputs=[self._d, self._d_previous, self._d_before, float(omegas[iteration])], device=dev)
+                   inputs=[self._d, self._d_previous, self._d_before, float(omegas[iteration]), self._plane_normal],
+                   device=dev)
 
     def _descent_terms(self) -> DescentTerms:
         """The solver's and model's arrays that the block descent reads (set once; the struct
@@ -286,6 +292,7 @@ class SolverImplicit:
         terms.hinge_friction, terms.hinge_slip_limit = m.hinge_friction, m.hinge_slip_limit
         terms.slip_world = self._slip_world
         terms.plane_normal, terms.plane_offset = self._plane_normal, self._plane_offset
+        terms.plane_push = self.collision.body_solve_push if self._planes else self._plane_normal
         return terms
 
 
