@@ -249,8 +249,8 @@ class SolverImplicit:
         if self._planes:
             launch(onto_planes, dim=m.node_count, inputs=[self._terms, state_in.node_q, self._d], device=dev)
             launch(plane_reactions, dim=m.node_count, inputs=[self._terms, state_in.node_q, dt, self._d], device=dev)
-        launch(record_correction, dim=m.node_count, inputs=[self._d, self._y, self._terms.plane_push, dt, self._correction],
-               device=dev)
+        launch(record_correction, dim=m.node_count,
+               inputs=[self._d, self._y, self._terms.plane_push, dt, self._correction], device=dev)
         launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._d, dt],
                outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
