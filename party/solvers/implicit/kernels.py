@@ -61,7 +61,7 @@ def inertial_target(
 PLANE_CONTACT = wp.constant(1.0e-4)
 """How far [m] above its body plane a node still counts as resting on it (:func:`plane_reactions`):
 the sweeps leave a node the plane held a few microns off it, and a node given no reaction is
-given no friction either (1 um: GarmentCode's hoody slid on the body and did not come to rest)."""
+given no friction either."""
 
 
 @wp.kernel
