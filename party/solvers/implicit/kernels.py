@@ -262,6 +262,14 @@ def node_terms(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt
 
 
 @wp.func
+def behind_plane(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), i: int, d: wp.vec3) -> float:
+    """How far [m] node i at displacement ``d`` lies behind its body plane (negative: in front;
+    0 for a node without one)."""
+    n = terms.plane_normal[i]
+    return terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(d, n)
+
+
+@wp.func
 def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
                  disp: wp.array(dtype=wp.vec3)):
     """One Newton step on one node's share of the incremental potential, in the node's
@@ -299,7 +307,7 @@ def descend_node(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), 
         inverse = wp.inverse(hess)
         d_new = di - inverse * grad
         n = terms.plane_normal[i]
-        gap = terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(d_new, n)
+        gap = behind_plane(terms, x_start, i, d_new)
         if wp.length_sq(n) > 0.0 and gap > 0.0:
             d_new += (gap / wp.dot(n, inverse * n)) * (inverse * n)
         disp[i] = d_new
@@ -313,7 +321,7 @@ def onto_planes(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), disp: wp.
     n = terms.plane_normal[i]
     if terms.inv_mass[i] == 0.0 or wp.length_sq(n) == 0.0:
         return
-    gap = terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(disp[i], n)
+    gap = behind_plane(terms, x_start, i, disp[i])
     if gap > 0.0:
         disp[i] = disp[i] + gap * n
 
@@ -331,7 +339,7 @@ def plane_reactions(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: f
     n = terms.plane_normal[i]
     if terms.inv_mass[i] == 0.0 or wp.length_sq(n) == 0.0:
         return
-    gap = terms.plane_offset[i] - wp.dot(x_start[i], n) - wp.dot(disp[i], n)
+    gap = behind_plane(terms, x_start, i, disp[i])
     if gap < -PLANE_CONTACT:
         return
     reaction = wp.max(wp.dot(n, node_terms(i, terms, x_start, dt, disp).grad), 0.0)

@@ -292,7 +292,8 @@ class SolverImplicit:
         terms.hinge_friction, terms.hinge_slip_limit = m.hinge_friction, m.hinge_slip_limit
         terms.slip_world = self._slip_world
         terms.plane_normal, terms.plane_offset = self._plane_normal, self._plane_offset
-        terms.plane_push = self.collision.body_solve_push if self._planes else self._plane_normal
+        terms.plane_push = (self.collision.body_solve_push if self._planes
+                            else wp.zeros(m.node_count, dtype=wp.vec3, device=m.device))
         return terms
 
 
