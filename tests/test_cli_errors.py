@@ -36,6 +36,19 @@ def test_bad_run_options(tmp_path, args, message):
     assert "Traceback" not in result.stderr
 
 
+@pytest.mark.parametrize("scene", ["dress", "rod-wind", "sphere-drop"])
+@pytest.mark.parametrize("args,message", [
+    (["--duration", "-1"], "error: duration must be positive, got -1.0"),
+    (["--dt", "-1e-4"], "error: time step must be positive, got -0.0001"),
+])
+def test_every_scene_rejects_a_time_that_is_not_positive_before_setting_up(tmp_path, scene, args, message):
+    quick = [] if scene == "rod-wind" else ["--quick"]  # rod-wind has no --quick
+    result = party("run", scene, *quick, "--out", str(tmp_path / "o"), "--no-progress", *args)
+    assert result.returncode == 1
+    assert result.stderr.strip() == message
+    assert not (tmp_path / "o").exists()
+
+
 def test_unknown_scene():
     result = party("run", "no-such-scene", "--out", "x")
     assert result.returncode == 1

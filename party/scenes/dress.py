@@ -27,7 +27,7 @@ from ..output.frames import write_json
 from ..pattern import load_pattern
 from ..solvers.select import DEFAULT_DT, check_solver, guard_every, make_solver
 from .garment_sim import garment_model, sew
-from .scene import Scene
+from .scene import Scene, check_timing
 
 PATTERN = "dress_sleeves.json"
 PAPER_DT = 1.0e-4
@@ -46,6 +46,7 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None
     """The dress on dress form ``size``; ``quick`` coarsens everything for a fast check. ``dt``
     [s] defaults to the solver's (the paper's 1e-4 s for the explicit one)."""
     dt = DEFAULT_DT[check_solver(solver)] if dt is None else dt
+    check_timing(duration, dt)
     if quick:
         spacing, duration = max(spacing, 0.03), min(duration, 0.3)
     fabric = fabric or wool_flannel()

@@ -18,7 +18,7 @@ from ..meshing import rectangular_net
 from ..model import ModelBuilder
 from ..solvers import Air
 from ..solvers.select import DEFAULT_DT, check_solver, make_solver
-from .scene import Scene
+from .scene import Scene, check_timing
 
 ROD_HEIGHT = 1.0      # m, rod axis above the floor
 ROD_RADIUS = 0.015    # m
@@ -50,10 +50,7 @@ def build(*, spacing: float = 0.0125, duration: float = 1.0, wind_speed: float =
     """The rod-in-the-wind scene. ``spacing`` is the net's node spacing [m]; ``wind_speed`` [m/s];
     ``dt`` [s] defaults to the solver's (the paper's 1e-4 s for the explicit one)."""
     dt = DEFAULT_DT[check_solver(solver)] if dt is None else dt
-    if not duration > 0:
-        raise InvalidInput(f"duration must be positive, got {duration}")
-    if not dt > 0:
-        raise InvalidInput(f"time step must be positive, got {dt}")
+    check_timing(duration, dt)
     if not spacing > 0 or spacing > length / 4:
         raise InvalidInput(f"spacing must be positive and below {length / 4} m, got {spacing}")
     fabric = fabric or wool_flannel()

@@ -6,7 +6,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from ..errors import InvalidInput
 from ..model import Model
+
+
+def check_timing(duration: float, dt: float) -> None:
+    """Reject a scene's simulated time ``duration`` [s] or time step ``dt`` [s] that is not
+    positive, before any set-up work."""
+    if not duration > 0:
+        raise InvalidInput(f"duration must be positive, got {duration}")
+    if not dt > 0:
+        raise InvalidInput(f"time step must be positive, got {dt}")
 
 
 @dataclass

@@ -16,7 +16,7 @@ from ..fabric import Fabric, fabric_by_name
 from ..meshing import rectangular_net
 from ..model import ModelBuilder
 from ..solvers.select import DEFAULT_DT, check_solver, make_solver
-from .scene import Scene
+from .scene import Scene, check_timing
 
 SPHERE_RADIUS = 0.3   # m
 CLOTH_SIZE = 1.0      # m
@@ -31,11 +31,8 @@ def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implici
         grid, duration = min(grid, 24), min(duration, 0.5)
     if not 2 <= grid <= 1000:
         raise InvalidInput(f"--grid must lie in 2-1000 nodes per side, got {grid}")
-    if not duration > 0:
-        raise InvalidInput(f"duration must be positive, got {duration}")
     dt = DEFAULT_DT[solver] if dt is None else dt
-    if not dt > 0:
-        raise InvalidInput(f"time step must be positive, got {dt}")
+    check_timing(duration, dt)
     fabric = fabric_by_name(fabric) if isinstance(fabric, str) else fabric
     spacing = CLOTH_SIZE / (grid - 1)
     net = rectangular_net(CLOTH_SIZE, CLOTH_SIZE, spacing)
