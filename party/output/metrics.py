@@ -40,14 +40,16 @@ def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.a
 
 
 @wp.kernel
-def _height_over_vertex(cloth: wp.uint64, vertices: wp.array(dtype=wp.vec3), normals: wp.array(dtype=wp.vec3),
-                        reach: float, height: wp.array(dtype=float)):
+def _cloth_over_vertex(cloth: wp.uint64, vertices: wp.array(dtype=wp.vec3), normals: wp.array(dtype=wp.vec3),
+                       reach: float, height: wp.array(dtype=float), nearest: wp.array(dtype=wp.vec3)):
     i = wp.tid()
     height[i] = 1.0e30
+    nearest[i] = vertices[i]
     found = wp.mesh_query_point_no_sign(cloth, vertices[i], reach)
     if found.result:
         q = wp.mesh_eval_position(cloth, found.face, found.u, found.v)
         height[i] = wp.dot(q - vertices[i], normals[i])
+        nearest[i] = q
 
 
 @wp.kernel
@@ -78,9 +80,12 @@ def distances_to_surface(points: np.ndarray, surface_points: np.ndarray, surface
 def body_vertices_through(points: np.ndarray, triangles: np.ndarray, colliders, reach: float = 0.02,
                           device: str = "cpu") -> int:
     """Number of collider vertices that come through the cloth: the nearest cloth point, if
-    within ``reach`` [m], lies behind the vertex along its normal. Nodes can all be outside a
-    body while its vertices poke through the triangles between them (seen as skin through the
-    cloth in pictures); zero when the cloth covers the body wherever it lies on it."""
+    within ``reach`` [m], lies behind the vertex along its normal and inside the collider.
+    Nodes can all be outside a body while its vertices poke through the triangles between them
+    (seen as skin through the cloth in pictures); zero when the cloth covers the body wherever
+    it lies on it. Cloth outside the body is not counted though it lies behind a vertex: behind
+    a body's vertex buried in another part of the same body (an arm mesh that runs into the
+    torso at the armpit) or on a thin part's far side (an ear, under a hood)."""
     if len(triangles) == 0 or not colliders:
         return 0
     vertices = np.concatenate([c.vertices for c in colliders]).astype(np.float32)
@@ -88,10 +93,15 @@ def body_vertices_through(points: np.ndarray, triangles: np.ndarray, colliders, 
     cloth = wp.Mesh(points=wp.array(points.astype(np.float32), dtype=wp.vec3, device=device),
                     indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
     height = wp.zeros(len(vertices), dtype=float, device=device)
-    launch(_height_over_vertex, dim=len(vertices),
+    nearest = wp.zeros(len(vertices), dtype=wp.vec3, device=device)
+    launch(_cloth_over_vertex, dim=len(vertices),
            inputs=[cloth.id, wp.array(vertices, dtype=wp.vec3, device=device),
-                   wp.array(normals, dtype=wp.vec3, device=device), float(reach), height], device=device)
-    return int(np.sum(height.numpy() < 0.0))
+                   wp.array(normals, dtype=wp.vec3, device=device), float(reach), height, nearest], device=device)
+    behind = height.numpy() < 0.0
+    if not behind.any():
+        return 0
+    inside, _ = ColliderProbe(colliders, device).inside_and_distance(nearest.numpy()[behind].astype(float))
+    return int(inside.sum())
 
 
 def cloth_crossings(points: np.ndarray, triangles: np.ndarray, device: str = "cpu") -> int:
