@@ -29,14 +29,15 @@ def paper_response(v, n, mu, sigma, v_body):
     return vt - sigma * vn + v_body
 
 
-def node_over_floor(velocity, floor_velocity=(0.0, 0.0, 0.0), height=0.005, solver="explicit", dt=DT):
+def node_over_floor(velocity, floor_velocity=(0.0, 0.0, 0.0), height=0.005, solver="explicit", dt=DT,
+                    collision=CollisionSettings(cloth=False)):
     fabric = wool_flannel()
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     b.add_node((0.0, 0.0, height), 1e-4, fabric=fabric)
     slab = floor(0.0, size=2.0)
     b.add_collider(type(slab)(slab.name, slab.vertices, slab.faces, np.asarray(floor_velocity, float)))
     model = b.finalize("cpu")
-    integrator = SOLVERS[solver](model, collision=CollisionSettings(cloth=False))
+    integrator = SOLVERS[solver](model, collision=collision)
     state, out = model.state(velocity=velocity), model.state()
     integrator.step(state, out, model.control(), dt)
     return out
@@ -53,6 +54,22 @@ def test_static_floor_response_is_eqs_8_to_12(velocity, solver):
     expected = paper_response(np.array(velocity), np.array([0, 0, 1.0]), MU, SIGMA, np.zeros(3))
     assert np.allclose(out.velocities()[0], expected, atol=1e-4)
     assert out.positions()[0, 2] >= EPS - 1e-6
+
+
+@both_solvers
+@pytest.mark.parametrize("arrive", [False, True])
+def test_a_node_stopped_by_the_body_bounces_from_where_its_step_reached_the_shell(arrive, solver):
+    """A node 5 mm over the floor at 30 m/s down, a step of 1e-4 s taking it 3 mm, into the
+    shell eps = 3 mm thick: as printed the response leaves it where it started and it ends
+    its step at 5 mm plus its bounce, sigma 30 m/s dt; with ``arrive`` (the implicit solver's
+    large steps) it is first moved to eps, where its step reached the shell, and ends at eps
+    plus the bounce. Its velocity is eqs. (8)-(12)'s either way."""
+    velocity = (1.0, 0.5, -30.0)
+    out = node_over_floor(velocity, solver=solver, collision=CollisionSettings(cloth=False, arrive=arrive))
+    bounce = SIGMA * 30.0 * DT
+    assert out.positions()[0, 2] == pytest.approx((EPS if arrive else 0.005) + bounce, abs=1e-6)
+    expected = paper_response(np.array(velocity), np.array([0, 0, 1.0]), MU, SIGMA, np.zeros(3))
+    assert np.allclose(out.velocities()[0], expected, atol=1e-4)
 
 
 @both_solvers

@@ -132,17 +132,19 @@ def test_stiff_light_cloth_drapes_as_with_four_times_the_sweeps(monkeypatch):
     assert abs(given.nodes - many.nodes) <= 1
 
 
-def test_stiff_light_cloth_drapes_alike_at_case_6s_mesh_and_at_half_its_resolution():
-    """Case 6's denim specimen as ``party validate --solver implicit`` drapes it (1/1,000 s,
-    the drape's 15 sweeps): at case 6's 7.5 mm within 5 DC points of the specimen at 15 mm
-    (41.4 and 41.2 %; the folds, 9 and 7, grow with the resolution, as the explicit solver's
-    do). With the rule's 10 sweeps it crumpled at 7.5 mm to DC 13.4 % with 3 folds."""
+def test_stiff_light_cloth_drapes_at_case_6s_mesh_as_with_the_explicit_solver():
+    """Case 6's denim specimen at its 7.5 mm as ``party validate`` drapes it with each solver
+    (the implicit one at 1/1,000 s and the drape's 15 sweeps): DC within 3 points and folds
+    within 2 (45.6 and 46.1 %, 10 and 11 folds). With the rule's 10 sweeps the implicit solver
+    crumpled it to DC 13.4 % with 3 folds; before a node that Collision() stops at the body
+    was moved onto its shell (``CollisionSettings.arrive``), it draped to 41.4 %."""
     from party.validate import cusick
 
     denim = library()["denim"]
-    fine = cusick.drape_test(denim, "implicit", cusick.SPACINGS["default"])
-    coarse = cusick.drape_test(denim, "implicit", cusick.SPACINGS["quick"])
-    assert abs(fine.coefficient - coarse.coefficient) < 0.05
+    implicit = cusick.drape_test(denim, "implicit", cusick.SPACINGS["default"])
+    explicit = cusick.drape_test(denim, "explicit", cusick.SPACINGS["default"])
+    assert abs(implicit.coefficient - explicit.coefficient) < 0.03
+    assert abs(implicit.nodes - explicit.nodes) <= 2
 
 
 def test_stiff_strip_rests_alike_at_the_origin_and_a_metre_from_it():

@@ -152,6 +152,7 @@ def collide_body(
     candidates: wp.array(dtype=int, ndim=2),
     candidate_count: wp.array(dtype=int),
     dt: float,
+    arrive: int,
     settled: wp.array(dtype=int),
     touched: wp.array(dtype=int),
     contact_face: wp.array(dtype=int),
@@ -165,7 +166,11 @@ def collide_body(
     earliest such contact wins; its point p gives the body normal n (interpolated corner
     normals, smooth except across creases) and the body velocity at p. Eqs. (8)-(12) give the new velocity; if the step would
     still end closer than eps to the triangle, the node's start is moved out along the face
-    normal so that the step ends at eps (a position correction, adding no velocity).
+    normal so that the step ends at eps (a position correction, adding no velocity). With
+    ``arrive`` (ours, for large steps), a node that starts farther than eps from the triangle's
+    plane is first moved along its normal to eps, where its step would have reached it, and
+    takes the new velocity from there; as printed, the response leaves it where it started, up
+    to a step's approach off the body.
 
     Skips a node left ``settled`` by the last pass and not ``touched`` by this one (see
     :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes. The
@@ -230,6 +235,11 @@ def collide_body(
         n = nf
     vbody = interpolate(best_w, body_qd[fa], body_qd[fb], body_qd[fc])
     vnew = friction_restitution_response(v_given - vbody, n, friction[i], restitution[i], wp.dot(push, n)) + vbody
+    s_start = wp.dot(x0 - a, nf)
+    if arrive == 1 and s_start > eps:
+        x0 = x0 - (s_start - eps) * nf
+        x[i] = x0
+        touched[i] = 1
     s_end = wp.dot(x0 - a, nf) + wp.dot(vnew - vbody, nf) * dt
     if s_end < eps:
         x[i] = x0 + (eps - s_end) * nf

@@ -44,6 +44,10 @@ class CollisionSettings:
             :mod:`party.collision.body_vertices`), so that no body vertex comes through a
             triangle between the cloth's nodes; on with the implicit solver
             (:func:`party.solvers.select.large_step_collision`).
+        arrive: A node whose step reaches a body's thickness shell from outside is moved onto
+            the shell first and takes its response there (ours:
+            :func:`party.collision.body.collide_body`); as printed, it stays where it started.
+            On with the implicit solver, whose steps left nodes stopped millimetres off the body.
         exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
             (the node may not fold through its neighbours' triangles, which keeps sharp folds
             of a coarse net from crossing themselves); 1, also those holding one of its mesh
@@ -61,6 +65,7 @@ class CollisionSettings:
     crossing_guard: bool = False
     guard_every: int = 1
     body_vertices: bool = False
+    arrive: bool = False
 
     def __post_init__(self) -> None:
         if self.broad_phase not in ("intervals", "bvh"):
@@ -264,7 +269,7 @@ class CollisionPipeline:
         launch_items(collide_body, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution, state.collider_q,
                       state.collider_qd, m.collider_normals, m.collider_faces, self.body_faces, self.body_face_count, dt,
-                      self._settled, self._touched, self.body_contact_face, self.body_solve_push], m.device)
+                      int(self.settings.arrive), self._settled, self._touched, self.body_contact_face, self.body_solve_push], m.device)
 
     def _search_body(self, x: wp.array, v: wp.array, state: State, dt: float, continuing: bool) -> None:
         """Search the body's triangles (and vertices) again for the nodes (cloth triangles) that

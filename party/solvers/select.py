@@ -32,7 +32,7 @@ def large_step_collision(collision: CollisionSettings | None) -> CollisionSettin
     they let more edges slip through each other, and cloth triangles answering body vertices
     (:mod:`party.collision.body_vertices`), whose pushes the guard keeps from crossing layers.
     The explicit solver keeps the paper's Collision() as printed."""
-    return None if collision is None else replace(collision, crossing_guard=True, body_vertices=True)
+    return None if collision is None else replace(collision, crossing_guard=True, body_vertices=True, arrive=True)
 
 
 def check_solver(name: str) -> str:
