@@ -269,7 +269,8 @@ class CollisionPipeline:
         launch_items(collide_body, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, m.node_friction, m.node_restitution, state.collider_q,
                       state.collider_qd, m.collider_normals, m.collider_faces, self.body_faces, self.body_face_count, dt,
-                      int(self.settings.arrive), self._settled, self._touched, self.body_contact_face, self.body_solve_push], m.device)
+                      int(self.settings.arrive), self._settled, self._touched, self.body_contact_face,
+                      self.body_solve_push], m.device)
 
     def _search_body(self, x: wp.array, v: wp.array, state: State, dt: float, continuing: bool) -> None:
         """Search the body's triangles (and vertices) again for the nodes (cloth triangles) that
