@@ -78,7 +78,8 @@ def test_a_body_vertex_is_counted_through_the_cloth_when_the_cloth_lies_behind_i
 
 def _box(low, high) -> trimesh.Trimesh:
     low, high = np.asarray(low, float), np.asarray(high, float)
-    return trimesh.creation.box(extents=high - low, transform=trimesh.transformations.translation_matrix((low + high) / 2))
+    centre = trimesh.transformations.translation_matrix((low + high) / 2)
+    return trimesh.creation.box(extents=high - low, transform=centre)
 
 
 def test_cloth_beside_a_thin_part_of_the_body_is_not_counted():
