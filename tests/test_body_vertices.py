@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from party.body.collider import collider_from_trimesh
+from party.body import box
+from party.body.collider import ColliderMesh, collider_from_trimesh
 from party.collision import CollisionSettings
 from party.collision.body_vertices import GAP
 from party.fabric import wool_flannel
@@ -76,19 +77,13 @@ def test_a_body_vertex_is_counted_through_the_cloth_when_the_cloth_lies_behind_i
     assert body_vertices_through(points, net.triangles, [cone]) == through
 
 
-def _box(low, high) -> trimesh.Trimesh:
-    low, high = np.asarray(low, float), np.asarray(high, float)
-    centre = trimesh.transformations.translation_matrix((low + high) / 2)
-    return trimesh.creation.box(extents=high - low, transform=centre)
-
-
 def test_cloth_beside_a_thin_part_of_the_body_is_not_counted():
     """An ear-like fin 4 mm thick (x from -2 to 2 mm) beside a flat cloth wall at x = 6 mm: the
     wall lies behind the far side's 4 corners along their normals, within reach, but outside
     the fin (the cone's tip above counts the cloth behind a vertex inside the body)."""
     from party.output.metrics import body_vertices_through
 
-    fin = collider_from_trimesh(_box((-0.002, -0.02, 0.0), (0.002, 0.02, 0.04)), "ear")
+    fin = box((0.004, 0.04, 0.04), center=(0.0, 0.0, 0.02), name="ear")
     net = rectangular_net(0.1, 0.1, 0.01)
     wall = np.c_[np.full(net.node_count, 0.006), net.uv - (0.05, 0.03)]
     assert body_vertices_through(wall, net.triangles, [fin]) == 0
@@ -101,11 +96,12 @@ def test_a_body_vertex_buried_in_another_part_of_the_body_is_not_counted():
     the body."""
     from party.output.metrics import body_vertices_through
 
-    body = trimesh.util.concatenate([_box((-0.05, -0.05, -0.05), (0.05, 0.05, 0.05)),
-                                     _box((0.03, -0.06, 0.04), (0.2, 0.06, 0.1))])
+    torso, arm = box((0.1, 0.1, 0.1)), box((0.17, 0.12, 0.06), center=(0.115, 0.0, 0.07))
+    body = ColliderMesh("body", np.vstack([torso.vertices, arm.vertices]),
+                        np.vstack([torso.faces, arm.faces + len(torso.vertices)]))
     net = rectangular_net(0.24, 0.2, 0.01)
     sheet = np.c_[net.uv + (0.06, -0.1), np.full(net.node_count, 0.035)]
-    assert body_vertices_through(sheet, net.triangles, [collider_from_trimesh(body, "body")]) == 0
+    assert body_vertices_through(sheet, net.triangles, [body]) == 0
 
 
 def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothing(monkeypatch):
