@@ -238,9 +238,10 @@ def collide_body(
     s_start = wp.dot(x0 - a, nf)
     if arrive == 1 and s_start > eps:
         x0 = x0 - (s_start - eps) * nf
+        s_start = eps
         x[i] = x0
         touched[i] = 1
-    s_end = wp.dot(x0 - a, nf) + wp.dot(vnew - vbody, nf) * dt
+    s_end = s_start + wp.dot(vnew - vbody, nf) * dt
     if s_end < eps:
         x[i] = x0 + (eps - s_end) * nf
         touched[i] = 1
