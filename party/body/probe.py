@@ -7,6 +7,8 @@ import warp as wp
 
 from ..launch import launch
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 @wp.kernel
 def _inside_and_distance(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,

@@ -7,6 +7,8 @@ from .geometry import (boxes_overlap, closest_point_barycentric, differs, fricti
                        step_box, step_within, unchanged)
 from .intervals import IntervalLists, first_visit, query_axis
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 EDGE_TOLERANCE = 0.25
 """A node whose projection falls outside a triangle by up to this fraction of the thickness
 still counts as over it, so that no node slips between two adjacent triangles."""

@@ -23,6 +23,8 @@ from .body import EDGE_TOLERANCE, covered
 from .geometry import closest_point_barycentric, interpolate, triangle_step
 from .nearest import keep_nearest
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 GAP = 0.25
 """The clearance kept between a body vertex and the cloth over it, as a fraction of eps: enough
 that the body does not show through, less than the nodes' eps, so that a garment tight on

@@ -9,6 +9,8 @@ from .geometry import (boxes_overlap, closest_point_barycentric, interpolate, st
 from .intervals import IntervalLists, first_visit, query_axis
 from .nearest import keep_nearest
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 MAX_CONTACTS = 4
 """Cloth-cloth contacts kept per node (the nearest ones)."""
 

@@ -36,6 +36,8 @@ from ..model import Model
 from ..meshing.net import triangle_edges
 from .geometry import edge_pierces_triangle, edge_shares_node, segment_hits_triangle, segment_triangle_distance
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 MAX_SPREAD = 32
 """Rounds of growing the reverted nodes over stretched elements (:meth:`CrossingGuard._spread`)."""
 

@@ -19,6 +19,8 @@ import warp as wp
 from ..errors import PartyError
 from ..launch import launch
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 @wp.struct
 class IntervalLists:

@@ -18,6 +18,8 @@ from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_c
                     gather_cloth_triangles_bvh, moved_beyond, respond_cloth, sum_motion)
 from .intervals import AxisIntervalLists
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 @dataclass(frozen=True)
 class CollisionSettings:

@@ -21,6 +21,8 @@ from ..launch import launch
 from ..meshing.net import triangle_edges
 from .geometry import edge_pierces_triangle
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 STEP = 2.0e-4
 """Largest displacement of a node per iteration [m] (h0 of Volino's step)."""
 

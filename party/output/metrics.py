@@ -13,6 +13,8 @@ from ..collision.geometry import edge_pierces_triangle
 from ..launch import launch
 from ..meshing.net import triangle_edges
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 def collider_inside_and_distance(points: np.ndarray, collider: ColliderMesh, device: str = "cpu",
                                  max_dist: float = 1.0e3) -> tuple[np.ndarray, np.ndarray]:

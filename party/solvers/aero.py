@@ -28,6 +28,8 @@ import warp as wp
 
 from ..launch import launch
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 @dataclass(frozen=True)
 class Air:

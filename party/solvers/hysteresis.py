@@ -26,6 +26,8 @@ from ..launch import launch
 from ..model import Model, State
 from .explicit.kernels import stencil_curvature
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 @wp.func
 def stencil_frame(x: wp.array(dtype=wp.vec3), n: wp.vec4i) -> wp.mat33:

@@ -17,6 +17,8 @@ from ..model import Model, State
 from .explicit.solver import critical_time_step
 from .select import DEFAULT_DT, make_solver
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 DRAPE_SWEEPS = 15
 """The implicit solver's sweeps per step when cloth drapes to rest (garments, Cusick
 specimens), half as many again as its default: a solve cut short leaves the soft modes of

@@ -2,6 +2,8 @@
 
 import warp as wp
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 @wp.kernel
 def net_forces_and_velocity(

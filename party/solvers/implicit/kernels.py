@@ -7,6 +7,8 @@ from ...collision.geometry import closest_point_barycentric, interpolate
 from ...launch import WorkerSync, worker_barrier
 from ..hysteresis import slider_moment
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 
 @wp.kernel
 def inertial_target(
