@@ -1,5 +1,7 @@
 """The ellipse dress form and body import."""
 
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -67,3 +69,14 @@ def test_crease_normals_are_the_faces_normals_at_convex_sharp_vertices_only():
     outer = np.flatnonzero(np.all(np.abs(block.vertices[:, :2] - (2, 0)) < 1e-9, axis=1))
     assert len(inner) == 2 and not creases(block)[inner].any()
     assert np.all(np.linalg.norm(creases(block)[outer], axis=2).max(axis=1) > 0)
+
+
+def test_a_probe_made_before_anything_else_starts_warp_quietly():
+    """``party run dress``'s first Warp call is a ColliderProbe of the dress form: made before
+    party had started Warp, it printed Warp's banner, a missing-CUDA-driver warning and a
+    module-load line into the demo's output. One point inside a sphere is counted, and nothing
+    else is printed."""
+    code = ("import numpy as np; from party.body import sphere; from party.body.probe import ColliderProbe; "
+            "print(ColliderProbe([sphere(0.3)]).penetrations(np.zeros((1, 3))))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "1\n", "")

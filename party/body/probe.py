@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
+from ..device import resolve
 from ..launch import launch
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
@@ -25,8 +26,8 @@ def _inside_and_distance(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_d
 class ColliderProbe:
     """Inside and distance queries against colliders, their BVHs built once."""
 
-    def __init__(self, colliders, device: str = "cpu") -> None:
-        self.device = device
+    def __init__(self, colliders, device: str | None = "cpu") -> None:
+        self.device = resolve(device)  # initialises Warp quietly before the first array
         self.meshes = [
             wp.Mesh(points=wp.array(c.vertices.astype(np.float32), dtype=wp.vec3, device=device),
                     indices=wp.array(c.faces.ravel().astype(np.int32), dtype=int, device=device))
