@@ -29,8 +29,8 @@ class ColliderProbe:
     def __init__(self, colliders, device: str | None = "cpu") -> None:
         self.device = resolve(device)  # initialises Warp quietly before the first array
         self.meshes = [
-            wp.Mesh(points=wp.array(c.vertices.astype(np.float32), dtype=wp.vec3, device=device),
-                    indices=wp.array(c.faces.ravel().astype(np.int32), dtype=int, device=device))
+            wp.Mesh(points=wp.array(c.vertices.astype(np.float32), dtype=wp.vec3, device=self.device),
+                    indices=wp.array(c.faces.ravel().astype(np.int32), dtype=int, device=self.device))
             for c in colliders
         ]
 
