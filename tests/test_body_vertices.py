@@ -142,7 +142,8 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
                                                         wp.zeros(n, dtype=wp.vec3), unused, faces, face_count,
                                                         overflow])
         wp.launch(gather_body_vertices, dim=t, inputs=[0, x, v, model.node_thickness, model.triangle_nodes,
-                                                       self._vertex_tree.id, state.collider_q, state.collider_qd, dt,
+                                                       self._vertex_tree.id, self.tested_vertices, state.collider_q,
+                                                       state.collider_qd, dt,
                                                        0.0, 1, 0, wp.zeros((t, 3), dtype=wp.vec3),
                                                        wp.zeros((t, 3), dtype=wp.vec3), unused, vertices,
                                                        vertex_count, distance, overflow])

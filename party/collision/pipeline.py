@@ -12,7 +12,8 @@ from ..model import Model, State
 from ..model.csr import csr_order
 from ..errors import InvalidInput
 from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_bvh
-from .body_vertices import MAX_VERTICES, gather_body_vertices, respond_body_vertices, vertex_boxes
+from .body_vertices import (MAX_VERTICES, gather_body_vertices, respond_body_vertices, vertex_boxes,
+                            vertices_to_test)
 from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
                     gather_cloth_triangles_bvh, moved_beyond, respond_cloth, sum_motion)
@@ -139,14 +140,17 @@ class CollisionPipeline:
             self.body_contact_face = wp.full(n, -1, dtype=int, device=dev)
             self.body_solve_push = wp.zeros(n, dtype=wp.vec3, device=dev)
             self._body_built = False
-        self.has_body_vertices = self.has_body and settings.body_vertices and model.triangle_count > 0
+        tested = (vertices_to_test(model) if self.has_body and settings.body_vertices and model.triangle_count > 0
+                  else np.zeros(0, dtype=int))
+        self.has_body_vertices = len(tested) > 0
         if self.has_body_vertices:
             normals = np.concatenate([c.vertex_normals() for c in model.host["colliders"]])
             self.body_vertex_normals = wp.array(normals.astype(np.float32), dtype=wp.vec3, device=dev)
             creases = np.concatenate([c.crease_normals() for c in model.host["colliders"]])
             self.body_crease_normals = wp.array(creases.astype(np.float32), dtype=wp.vec3, ndim=2, device=dev)
-            self._vertex_lower = wp.zeros(len(normals), dtype=wp.vec3, device=dev)
-            self._vertex_upper = wp.zeros(len(normals), dtype=wp.vec3, device=dev)
+            self.tested_vertices = wp.array(tested.astype(np.int32), dtype=int, device=dev)
+            self._vertex_lower = wp.zeros(len(tested), dtype=wp.vec3, device=dev)
+            self._vertex_upper = wp.zeros(len(tested), dtype=wp.vec3, device=dev)
             self._vertex_tree: wp.Bvh | None = None
             t = model.triangle_count
             self.body_vertices = wp.zeros((t, MAX_VERTICES), dtype=int, device=dev)
@@ -302,18 +306,18 @@ class CollisionPipeline:
                       self.body_face_count, self._overflow], dev)
         if self.has_body_vertices:
             if self._vertex_tree is None or (self.body_moving and not continuing):
-                launch(vertex_boxes, dim=len(state.collider_q),
-                       inputs=[state.collider_q, state.collider_qd, dt, half, self._vertex_lower,
-                               self._vertex_upper], device=dev)
+                launch(vertex_boxes, dim=self.tested_vertices.shape[0],
+                       inputs=[self.tested_vertices, state.collider_q, state.collider_qd, dt, half,
+                               self._vertex_lower, self._vertex_upper], device=dev)
                 if self._vertex_tree is None:
                     self._vertex_tree = wp.Bvh(self._vertex_lower, self._vertex_upper)
                 else:
                     self._vertex_tree.refit()
             launch_items(gather_body_vertices, 0, m.triangle_count,
-                         [x, v, m.node_thickness, m.triangle_nodes, self._vertex_tree.id, state.collider_q,
-                          state.collider_qd, dt, half, everything, int(continuing), self._triangle_ref,
-                          self._triangle_step_ref, self._searched_again, self.body_vertices, self.body_vertex_count,
-                          self._vertex_distance, self._overflow], dev)
+                         [x, v, m.node_thickness, m.triangle_nodes, self._vertex_tree.id, self.tested_vertices,
+                          state.collider_q, state.collider_qd, dt, half, everything, int(continuing),
+                          self._triangle_ref, self._triangle_step_ref, self._searched_again, self.body_vertices,
+                          self.body_vertex_count, self._vertex_distance, self._overflow], dev)
 
     def _search_cloth(self, x: wp.array, v: wp.array, dt: float) -> None:
         """Search the cloth's triangles again for every node: a node stays within margin/2 of
