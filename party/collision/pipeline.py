@@ -45,8 +45,9 @@ class CollisionSettings:
         guard_every: The guard checks every this many steps.
         body_vertices: Cloth triangles respond to the body's vertices as well (ours:
             :mod:`party.collision.body_vertices`), so that no body vertex comes through a
-            triangle between the cloth's nodes; on with the implicit solver
-            (:func:`party.solvers.select.large_step_collision`).
+            triangle between the cloth's nodes (only the vertices the cloth could come near are
+            tested: :func:`~party.collision.body_vertices.vertices_to_test`); on with the
+            implicit solver (:func:`party.solvers.select.large_step_collision`).
         arrive: A node whose step reaches a body's thickness shell from outside is moved onto
             the shell first and takes its response there (ours:
             :func:`party.collision.body.collide_body`); as printed, it stays where it started.
