@@ -26,8 +26,8 @@ def vertex_relief(collider: ColliderMesh, reach: float, *, enough: np.ndarray | 
     triangles cut.
 
     A vertex whose rise over the vertices alone reaches ``enough`` [m] (a scalar or one value
-    per vertex) is reported with that rise and its triangles are not clipped: the caller only
-    needs to know that it rises that far."""
+    per vertex) is reported with that rise, and with the cosine over those vertices' normals;
+    its triangles are not clipped: the caller only needs to know that it rises that far."""
     points = collider.vertices
     normals = collider.vertex_normals()
     count = len(points)
@@ -44,8 +44,6 @@ def vertex_relief(collider: ColliderMesh, reach: float, *, enough: np.ndarray | 
         open_ = open_[rise[open_] < enough[open_]]
         if len(open_) == 0:
             return rise, cosine
-    if len(open_) == 0:
-        return rise, cosine
     corners = points[collider.faces]
     vertex, face = _faces_near(points[open_], corners, reach)
     order = np.argsort(vertex, kind="stable")  # each open vertex meets the faces at it

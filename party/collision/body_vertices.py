@@ -117,11 +117,10 @@ def gather_body_vertices(
     overflow: wp.array(dtype=int),
 ):
     """The body vertices (``tested[item]`` for the items of ``bvh``) whose boxes (grown by
-    ``margin``, half the search margin) meet cloth
-    triangle t's box over the step grown by eps and ``margin``, and that lie no farther from
-    the triangle than eps, the search margin and both steps: until the next search each moves
-    at most half the margin beyond its step (the reasoning of
-    :func:`~party.collision.cloth.keep_candidate`). The nearest MAX_VERTICES are kept, and the
+    ``margin``, half the search margin) meet cloth triangle t's box over the step grown by eps
+    and ``margin``, and that lie no farther from the triangle than eps, the search margin and
+    both steps: until the next search each moves at most half the margin beyond its step (the
+    reasoning of :func:`~party.collision.cloth.keep_candidate`). The nearest MAX_VERTICES are kept, and the
     nodes' places in ``ref`` and their steps in ``ref_step``. With ``everything`` 0 only
     triangles with a node whose step left the region searched for it
     (:func:`~party.collision.body.covered`) search again (the body must be static then, or
