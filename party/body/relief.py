@@ -45,17 +45,13 @@ def vertex_relief(collider: ColliderMesh, reach: float, *, enough: np.ndarray | 
         if len(open_) == 0:
             return rise, cosine
     corners = points[collider.faces]
+    face_normals = collider.face_normals_unnormalized()
+    face_normals /= np.linalg.norm(face_normals, axis=1, keepdims=True)
     vertex, face = _faces_near(points[open_], corners, reach)
-    order = np.argsort(vertex, kind="stable")  # each open vertex meets the faces at it
-    vertex, face = open_[vertex[order]], face[order]
-    sizes = np.bincount(np.searchsorted(open_, vertex), minlength=len(open_))
-    height, cut = _lowest_in_ball(points[vertex], normals[vertex], corners[face], reach)
-    face_normal = np.cross(corners[face, 1] - corners[face, 0], corners[face, 2] - corners[face, 0])
-    face_normal /= np.linalg.norm(face_normal, axis=1, keepdims=True)
-    facing = np.where(cut, np.einsum("ij,ij->i", face_normal, normals[vertex]), 1.0)
-    starts = np.r_[0, np.cumsum(sizes)[:-1]]
-    rise[open_] = np.maximum(rise[open_], np.maximum.reduceat(height, starts))
-    cosine[open_] = np.minimum(cosine[open_], np.minimum.reduceat(facing, starts))
+    vertex = open_[vertex]
+    height, cut = _lowest_in_ball(points[vertex], normals[vertex], corners[face], face_normals[face], reach)
+    np.maximum.at(rise, vertex[cut], height[cut])
+    np.minimum.at(cosine, vertex[cut], np.einsum("ij,ij->i", face_normals[face[cut]], normals[vertex[cut]]))
     return rise, cosine
 
 
@@ -80,9 +76,11 @@ def _faces_near(points: np.ndarray, corners: np.ndarray, reach: float) -> tuple[
     return np.concatenate(point).astype(np.int64), np.concatenate(index).astype(np.int64)
 
 
-def _lowest_in_ball(p: np.ndarray, n: np.ndarray, tri: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
-    """For each pair (point p, unit direction n, triangle tri (3, 3)): the largest (p - q) . n
-    over the triangle's points q within ``reach`` of p, and whether any lies within it."""
+def _lowest_in_ball(p: np.ndarray, n: np.ndarray, tri: np.ndarray, plane: np.ndarray,
+                    reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """For each pair (point p, unit direction n, triangle tri (3, 3) with unit normal ``plane``):
+    the largest (p - q) . n over the triangle's points q within ``reach`` of p, and whether any
+    lies within it."""
     best = np.full(len(p), -np.inf)
     r2 = reach * reach
 
@@ -103,8 +101,6 @@ def _lowest_in_ball(p: np.ndarray, n: np.ndarray, tri: np.ndarray, reach: float)
         root = np.sqrt(np.where(real, disc, 0.0))
         for s in ((-qb - root) / (2.0 * qa), (-qb + root) / (2.0 * qa)):
             offer(a + s[:, None] * e, real & (s >= 0.0) & (s <= 1.0))
-    plane = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    plane /= np.linalg.norm(plane, axis=1, keepdims=True)
     height = np.einsum("ij,ij->i", p - tri[:, 0], plane)
     circle2 = r2 - height * height
     down = -(n - np.einsum("ij,ij->i", n, plane)[:, None] * plane)
