@@ -118,18 +118,23 @@ def test_stiff_light_cloth_drapes_as_with_four_times_the_sweeps(monkeypatch):
     """A Cusick specimen of denim at 15 mm, stiff for its inertia (K dt^2 / m 5,600 at
     1/300 s, the solver's own step rather than the drape tests' 1/1,000 s): the sweeps the
     solver's rule takes for it (14, from ``STIFFNESS_PER_SWEEP``; not the drape's 15) drape it
-    as 40 sweeps a step do, within 3 DC points and 1 fold. At 10 sweeps it crumpled to DC 9.5 %
-    with 2 folds."""
+    as 40 sweeps a step do, on average over four laid specimens (waviness seeds 0-3), within 5
+    DC points and 1.5 folds. At 10 sweeps it crumpled to DC 9.5 % with 2 folds. Which folds a
+    single specimen ends with is chaotic: the same settings gave DC 32.7 to 42.7 % and 5 to 10
+    folds over these seeds, and one seed alone differed by up to 9 points and 3 folds between
+    the two sweep counts (measured: rule 36.7 % and 7.5 folds, 40 sweeps 34.0 % and 7.25)."""
     from party.validate import cusick
 
     monkeypatch.setattr(cusick, "FALL_STEP", DEFAULT_DT["implicit"])
-    monkeypatch.setattr(cusick, "DRAPE_SWEEPS", 1)
     denim = library()["denim"]
-    given = cusick.drape_test(denim, "implicit", 0.015)
-    monkeypatch.setattr(cusick, "DRAPE_SWEEPS", 40)
-    many = cusick.drape_test(denim, "implicit", 0.015)
-    assert abs(given.coefficient - many.coefficient) < 0.03
-    assert abs(given.nodes - many.nodes) <= 1
+    drapes = {}
+    for sweeps in (1, 40):
+        monkeypatch.setattr(cusick, "DRAPE_SWEEPS", sweeps)
+        drapes[sweeps] = [cusick.drape_test(denim, "implicit", 0.015, seed=seed) for seed in range(4)]
+    given, many = ([(d.coefficient, d.nodes) for d in drapes[k]] for k in (1, 40))
+    (given_dc, given_folds), (many_dc, many_folds) = np.mean(given, axis=0), np.mean(many, axis=0)
+    assert abs(given_dc - many_dc) < 0.05
+    assert abs(given_folds - many_folds) <= 1.5
 
 
 def test_stiff_light_cloth_drapes_at_case_6s_mesh_as_with_the_explicit_solver():

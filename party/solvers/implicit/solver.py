@@ -229,7 +229,8 @@ class SolverImplicit:
         if self._planes:
             launch(body_planes, dim=m.node_count,
                    inputs=[self.collision.body_contact_face, m.collider_faces, state_in.collider_q,
-                           state_in.collider_qd, state_in.node_q, m.node_thickness, dt],
+                           state_in.collider_qd, state_in.node_q, m.node_thickness, self.collision.body_faces,
+                           self.collision.body_face_count, dt],
                    outputs=[self._plane_normal, self._plane_offset, self.collision.body_solve_push], device=dev)
         launch(inertial_target, dim=m.node_count,
                inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
