@@ -24,7 +24,7 @@ DROP_HEIGHT = 0.62    # m, the cloth's plane above the sphere's centre
 IMPLICIT_DT = 1.0 / 150.0
 """The implicit solver's step here [s]: Blender's at quality 5 and 30 frames a second, twice the
 garments' 1/300 s. A sheet on a sphere lands at it as close to a drop at 1/1,200 s as at 1/300 s
-(7 to 9 mm on average after 1 s, against 5 to 10; docs/design.md, Speed against the peers)."""
+(6.6 to 9.1 mm on average after 1 s, against 5.4 to 9.7; docs/design.md, Speed against the peers)."""
 
 
 def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implicit", fabric: Fabric | str = "cotton",
