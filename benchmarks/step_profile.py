@@ -201,7 +201,7 @@ def main() -> None:
     drop.add_argument("--grid", type=int, default=100)
     drop.add_argument("--self-collision", choices=("on", "off"), default="on")
     drop.add_argument("--seconds", type=float, default=1.0)
-    drop.add_argument("--dt", type=float, default=None, help="time step [s] (default: the scene's for the solver)")
+    drop.add_argument("--dt", type=float, default=None, help="time step [s] (default: the solver's)")
     drop.add_argument("--solver", choices=("implicit", "explicit"), default="implicit")
     square = workloads.add_parser("square", help="benchmarks/scaling.py's square at one size")
     square.add_argument("--nodes", type=int, default=100_000)

@@ -25,8 +25,6 @@ def test_sphere_drop_lands_on_the_sphere(tmp_path, solver, duration):
                   "--fabric", str(fabric), "--duration", duration)
     assert summary["parameters"]["solver"] == solver and summary["parameters"]["fabric"]["areal_density"] == 0.12
     assert summary["simulated_seconds"] == pytest.approx(float(duration), rel=0.01) and summary["wall_seconds"] > 0
-    if solver == "implicit":  # the scene's step: Blender's 1/150 s
-        assert summary["steps"] == round(float(duration) * 150)
     assert summary["body_penetrations"] == 0 and summary["cloth_crossings"] == 0
     final = sorted((tmp_path / "out" / "frames").glob("frame_*.ply"))[-1]
     points = np.asarray(trimesh.load(final, process=False).vertices)

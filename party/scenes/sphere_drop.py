@@ -21,23 +21,17 @@ from .scene import Scene, check_timing
 SPHERE_RADIUS = 0.3   # m
 CLOTH_SIZE = 1.0      # m
 DROP_HEIGHT = 0.62    # m, the cloth's plane above the sphere's centre
-IMPLICIT_DT = 1.0 / 150.0
-"""The implicit solver's step here [s]: Blender's at quality 5 and 30 frames a second, twice the
-garments' 1/300 s. A sheet on a sphere lands at it as close to a drop at 1/1,200 s as at 1/300 s
-(6.6 to 9.1 mm on average after 1 s, against 5.4 to 9.7; docs/design.md, Speed against the peers)."""
 
 
 def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implicit", fabric: Fabric | str = "cotton",
           duration: float = 1.0, dt: float | None = None, device: str | None = None, quick: bool = False) -> Scene:
-    """The sphere-drop scene with ``grid`` x ``grid`` nodes; ``dt`` [s] defaults to :data:`IMPLICIT_DT`
-    for the implicit solver and to the explicit solver's own step."""
+    """The sphere-drop scene with ``grid`` x ``grid`` nodes; ``dt`` defaults to the solver's."""
     check_solver(solver)
     if quick:
         grid, duration = min(grid, 24), min(duration, 0.5)
     if not 2 <= grid <= 1000:
         raise InvalidInput(f"--grid must lie in 2-1000 nodes per side, got {grid}")
-    if dt is None:
-        dt = IMPLICIT_DT if solver == "implicit" else DEFAULT_DT[solver]
+    dt = DEFAULT_DT[solver] if dt is None else dt
     check_timing(duration, dt)
     fabric = fabric_by_name(fabric) if isinstance(fabric, str) else fabric
     spacing = CLOTH_SIZE / (grid - 1)
