@@ -15,7 +15,8 @@ through a triangle of the final mesh, a peer's quads split in two; final height 
 the final shape lies from party implicit's: the mean and the largest distance from a node of either
 to the nearest point of the other's surface, the largest being the symmetric Hausdorff distance
 between the nodes and the surfaces; a node's nearest node would count the net's sampling as a
-difference, up to half a spacing between two nets on one surface). The outcome is
+difference, up to half a spacing between two nets on one surface; and the stretch along the
+grid, the largest and the share of row or column neighbours beyond 5 %). The outcome is
 equal where no node is inside the sphere, no edge crosses the cloth (with self-collision on) and
 the shapes lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's
 implicit solver at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where
@@ -60,6 +61,8 @@ SYSTEMS = ["party-implicit", "party-implicit-150hz", "party-explicit", "blender"
 PARTY_DT = {"party-implicit": None, "party-implicit-150hz": 1.0 / 150.0, "party-explicit": None}
 """party's time step [s] per system (None: the solver's own)."""
 SAME_SHAPE = 0.01
+STRETCHED = 0.05
+"""Strain beyond which :func:`grid_stretch` counts a row or column neighbour pair as stretched [-]."""
 """Largest distance between two systems' final shapes [m] for an equal outcome (issue 4: 1 cm)."""
 
 
@@ -185,7 +188,21 @@ def outcome(points: np.ndarray, triangles: np.ndarray) -> dict:
     return {"nodes": int(len(points)), "min_distance_from_centre_m": float(r.min()),
             "nodes_inside": int((r < SPHERE_RADIUS).sum()), "z_min_m": float(points[:, 2].min()),
             "z_max_m": float(points[:, 2].max()), "nan": nan, "points": points, "triangles": np.asarray(triangles),
-            "cloth_crossings": -1 if nan else cloth_crossings(points, np.asarray(triangles))}
+            "cloth_crossings": -1 if nan else cloth_crossings(points, np.asarray(triangles)),
+            **grid_stretch(points)}
+
+
+def grid_stretch(points: np.ndarray) -> dict:
+    """How far the final cloth is stretched along its grid: each system's N x N nodes in rows, as
+    all three lay them out, every pair of row or column neighbours against the spacing of the
+    1 m square. ``stretch_max``: the largest length over rest [-]; ``stretched_share``: the share
+    of pairs stretched by over :data:`STRETCHED` (a cap held stretched by friction shows here
+    and not in the shape's distance)."""
+    n = int(round(np.sqrt(len(points))))
+    grid = points.reshape(n, n, 3)
+    lengths = np.concatenate([np.linalg.norm(np.diff(grid, axis=0), axis=2).ravel(),
+                              np.linalg.norm(np.diff(grid, axis=1), axis=2).ravel()]) * (n - 1)
+    return {"stretch_max": float(lengths.max()), "stretched_share": float((lengths > 1.0 + STRETCHED).mean())}
 
 
 def shape_distance(result: dict, reference: dict) -> tuple[float, float]:
@@ -263,7 +280,8 @@ def describe(row: dict) -> str:
             f"(start-up {row['startup_seconds']:.1f} s), "
             f"min r {row['min_distance_from_centre_m']:.4f} m, inside {row['nodes_inside']}, "
             f"crossings {row['cloth_crossings']}, "
-            f"z {row['z_min_m']:.3f}..{row['z_max_m']:.3f} m")
+            f"z {row['z_min_m']:.3f}..{row['z_max_m']:.3f} m, stretch {row['stretch_max']:.3f} "
+            f"({100 * row['stretched_share']:.2f} % over {100 * STRETCHED:.0f} %)")
 
 
 def report(rows: list[dict], out: Path) -> None:
@@ -273,7 +291,7 @@ def report(rows: list[dict], out: Path) -> None:
     implicit = {r["scene"]: r for r in rows if r["system"] == "party-implicit" and "points" in r}
     table = Table(title="party vs Blender vs Newton (2-core CPU unless stated)")
     for column in ("scene", "system", "s per sim s", "x party-implicit", "start-up s", "min r m", "inside", "crossings",
-                   "z range m", "shape vs implicit mm (mean/max)", "equal outcome"):
+                   "z range m", "stretch max / >5 %", "shape vs implicit mm (mean/max)", "equal outcome"):
         table.add_column(column)
     for r in rows:
         if "wall_per_simulated_second" in r:
@@ -290,9 +308,10 @@ def report(rows: list[dict], out: Path) -> None:
                 shape, equal = f"{1000 * mean:.1f} / {1000 * largest:.1f}", "yes" if r["equal_outcome"] else "no"
             table.add_row(r["scene"], r["system"], seconds_text(r, "wall_per_simulated_second"), f"{ratio:.2f}",
                           f"{r['startup_seconds']:.1f}", f"{r['min_distance_from_centre_m']:.4f}", str(r["nodes_inside"]),
-                          str(r["cloth_crossings"]), f"{r['z_min_m']:.3f}..{r['z_max_m']:.3f}", shape, equal)
+                          str(r["cloth_crossings"]), f"{r['z_min_m']:.3f}..{r['z_max_m']:.3f}",
+                          f"{r['stretch_max']:.3f} / {100 * r['stretched_share']:.2f} %", shape, equal)
         else:
-            table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "", "")
+            table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "", "", "")
     Console(width=200).print(table)
     for scene in dict.fromkeys(r["scene"] for r in rows):
         times = {r["system"]: r["wall_per_simulated_second"] for r in rows
