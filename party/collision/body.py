@@ -181,7 +181,9 @@ def collide_body(
     reaction gave the node in the solve (:func:`~party.solvers.implicit.kernels.plane_reactions`):
     the first pass finds the contact with the node's velocity without it, as the node would
     have struck the body, and the friction cone takes it as normal impulse (not the bounce); it
-    is used once and cleared.
+    is used once and cleared, and the node counts as changed, since the next pass, without it,
+    may answer otherwise (the passes that skip settled nodes then stay bit for bit the same as
+    full passes).
     """
     i = first + wp.tid()
     if inv_mass[i] == 0.0 or unchanged(i, settled, touched):
@@ -190,7 +192,9 @@ def collide_body(
     v_given = v[i]
     push = solve_push[i]
     vi = v_given - push
-    solve_push[i] = wp.vec3(0.0)
+    if wp.length_sq(push) > 0.0:  # the next pass answers without it: not settled, whatever this one does
+        solve_push[i] = wp.vec3(0.0)
+        touched[i] = 1
     eps = thickness[i]
     best_t = float(2.0)
     best_s1 = float(1.0e30)

@@ -18,6 +18,7 @@ from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
                     gather_cloth_triangles_bvh, moved_beyond, respond_cloth, sum_motion)
 from .intervals import AxisIntervalLists
+from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, largest_speed, shortest_element
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
@@ -126,6 +127,9 @@ class CollisionPipeline:
         self._motion = wp.zeros(2, dtype=wp.vec3, device=dev)
         self._velocity_sum_ref = wp.zeros(1, dtype=wp.vec3, device=dev)
         self._searched_again = wp.zeros(n, dtype=int, device=dev)
+        self._most = wp.ones(1, dtype=int, device=dev)
+        self._body_speed = wp.zeros(1, dtype=float, device=dev)
+        self._node_length: wp.array | None = None
         self._thickness = float(model.node_thickness.numpy().max())
         if self.has_body:
             colliders = model.host["colliders"]
@@ -251,6 +255,29 @@ class CollisionPipeline:
                 launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
                 if int(self._changed.numpy()[0]) == 0:
                     break
+
+    def landing_substeps(self, state: State, dt: float) -> int:
+        """Substeps (1 to :data:`~party.collision.landing.MAX_LANDING_SUBSTEPS`) a step of ``dt``
+        [s] from ``state`` needs so that no node near a body moves farther than
+        :data:`~party.collision.landing.LANDING_REACH` of its shortest element relative to it
+        in one substep (:mod:`party.collision.landing`; reads one number from the device). 1
+        with the interval lists' broad phase, which only the explicit solver's short steps use."""
+        if not self.has_body or not self.bvh:
+            return 1
+        m = self.model
+        self._body_speed.zero_()
+        if self.body_tree.bvh is None or self.body_moving:
+            self.body_tree.build(state.collider_q, state.collider_qd, dt, 0.0)
+            launch(largest_speed, dim=len(state.collider_qd), inputs=[state.collider_qd, self._body_speed],
+                   device=m.device)
+        if self._node_length is None:
+            self._node_length = wp.array(shortest_element(m).astype(np.float32), dtype=float, device=m.device)
+        self._most.fill_(1)
+        launch(landing_substeps, dim=m.node_count,
+               inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self._node_length,
+                       self.body_tree.id, m.collider_faces, state.collider_qd, self._body_speed, dt,
+                       self.margin, LANDING_REACH, self._most], device=m.device)
+        return min(int(self._most.numpy()[0]), MAX_LANDING_SUBSTEPS)
 
     def vertex_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)

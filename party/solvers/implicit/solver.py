@@ -141,10 +141,13 @@ class SolverImplicit:
 
     def step(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
         """Advance ``state_in`` by ``dt`` [s] into ``state_out`` (distinct objects; swap after),
-        in :meth:`substeps` equal substeps."""
+        in :meth:`substeps` equal substeps, or more where cloth lands on a body
+        (:meth:`~party.collision.CollisionPipeline.landing_substeps`)."""
         if not dt > 0.0:
             raise InvalidInput(f"time step must be positive, got {dt}")
         count = self.substeps(dt)
+        if self.collision is not None:
+            count = max(count, self.collision.landing_substeps(state_in, dt))
         if count == 1:
             self._advance(state_in, state_out, control, dt)
             return
