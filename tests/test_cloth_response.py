@@ -175,7 +175,7 @@ def close_pass_settling_nothing(touched: wp.array(dtype=int), settled: wp.array(
                                 changed: wp.array(dtype=int)):
     i = wp.tid()
     settled[i] = 0
-    if touched[i] == 1:
+    if (touched[i] & 1) != 0:
         wp.atomic_add(changed, 0, 1)
     touched[i] = 0
 

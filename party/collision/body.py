@@ -3,8 +3,8 @@ response of eqs. (8)-(12)."""
 
 import warp as wp
 
-from .geometry import (boxes_overlap, closest_point_barycentric, differs, friction_restitution_response, interpolate,
-                       step_box, step_within, unchanged)
+from .geometry import (PUSH_SPENT, boxes_overlap, closest_point_barycentric, differs, friction_restitution_response,
+                       interpolate, step_box, step_within, unchanged)
 from .intervals import IntervalLists, first_visit, query_axis
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
@@ -181,9 +181,10 @@ def collide_body(
     reaction gave the node in the solve (:func:`~party.solvers.implicit.kernels.plane_reactions`):
     the first pass finds the contact with the node's velocity without it, as the node would
     have struck the body, and the friction cone takes it as normal impulse (not the bounce); it
-    is used once and cleared, and the node counts as changed, since the next pass, without it,
-    may answer otherwise (the passes that skip settled nodes then stay bit for bit the same as
-    full passes).
+    is used once and cleared, and the node is not settled for the next pass, which may answer
+    otherwise without it (``touched`` gets :data:`~party.collision.geometry.PUSH_SPENT`; the
+    passes that skip settled nodes then stay bit for bit the same as full passes), though it
+    does not count as changed.
     """
     i = first + wp.tid()
     if inv_mass[i] == 0.0 or unchanged(i, settled, touched):
@@ -192,9 +193,9 @@ def collide_body(
     v_given = v[i]
     push = solve_push[i]
     vi = v_given - push
-    if wp.length_sq(push) > 0.0:  # the next pass answers without it: not settled, whatever this one does
+    if wp.length_sq(push) > 0.0:  # the next pass answers without it: not settled, though not changed
         solve_push[i] = wp.vec3(0.0)
-        touched[i] = 1
+        touched[i] = touched[i] | PUSH_SPENT
     eps = thickness[i]
     best_t = float(2.0)
     best_s1 = float(1.0e30)

@@ -202,6 +202,11 @@ def differs(a: wp.vec3, b: wp.vec3) -> bool:
     return a[0] != b[0] or a[1] != b[1] or a[2] != b[2]
 
 
+PUSH_SPENT = wp.constant(2)
+"""Flag in ``touched`` beside 1 (changed): the node's solve push was used up in this pass
+(:func:`~party.collision.body.collide_body`), so the next pass must not skip it."""
+
+
 @wp.func
 def unchanged(i: int, settled: wp.array(dtype=int), touched: wp.array(dtype=int)) -> bool:
     """Node i was left as it was by the last pass of Collision() (``settled``) and so far by

@@ -79,11 +79,14 @@ class CollisionSettings:
 
 @wp.kernel
 def close_pass(touched: wp.array(dtype=int), settled: wp.array(dtype=int), changed: wp.array(dtype=int)):
-    """After a pass of Collision(): the nodes it left as they were are ``settled`` for the
-    next; count those it changed and clear ``touched``."""
+    """After a pass of Collision(): the nodes it left as they were (``touched`` 0) are
+    ``settled`` for the next; count those it changed (flag 1; a node with only
+    :data:`~party.collision.geometry.PUSH_SPENT` is neither) and clear ``touched``."""
     i = wp.tid()
-    settled[i] = 1 - touched[i]
-    if touched[i] == 1:
+    settled[i] = 0
+    if touched[i] == 0:
+        settled[i] = 1
+    if (touched[i] & 1) != 0:
         wp.atomic_add(changed, 0, 1)
     touched[i] = 0
 
