@@ -8,7 +8,7 @@ import pytest
 
 from party.body import floor, sphere
 from party.collision import CollisionSettings
-from party.collision.landing import LANDING_REACH, MAX_LANDING_SUBSTEPS
+from party.collision.landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, shortest_element
 from party.collision.pipeline import CollisionPipeline
 from party.fabric import fabric_by_name
 from party.meshing import rectangular_net
@@ -52,6 +52,17 @@ def test_a_body_moving_into_resting_cloth_cuts_the_step_by_their_relative_speed(
     assert pipeline.landing_substeps(model.state(), DT) == math.ceil(3.0 * DT / (LANDING_REACH * SPACING))
     with_it = model.state(velocity=np.tile((0, 0, 3.0), (model.node_count, 1)))
     assert pipeline.landing_substeps(with_it, DT) == 1
+
+
+def test_a_tie_shorter_than_the_net_does_not_set_the_reach():
+    """A sewing spring of 0.1 mm between two nodes of the net leaves their reach the net's
+    spacing, the shortest edge of their triangles."""
+    net = rectangular_net(0.1, 0.1, SPACING)
+    builder = ModelBuilder()
+    builder.add_cloth(net, fabric_by_name("cotton"), np.c_[net.uv, np.zeros(net.node_count)])
+    builder.add_springs(np.array([[0, 7]]), stiffness=100.0, rest_length=1e-4)
+    model = builder.finalize("cpu")
+    assert shortest_element(model) == pytest.approx(np.full(model.node_count, SPACING))
 
 
 def warp_weft_stretch(grid: int, dt: float, seconds: float, landing: bool, monkeypatch) -> np.ndarray:

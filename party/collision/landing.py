@@ -66,10 +66,27 @@ def landing_substeps(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), inv
 
 
 def shortest_element(model: Model) -> np.ndarray:
-    """Each node's shortest element at rest [m] (infinite for a node without one)."""
+    """Each node's shortest edge at rest [m]: of its cloth triangles (the net's spacing, not a
+    tie such as a sewing spring), or of its elements where it has no triangle; infinite for a
+    node with neither (it is never cut for)."""
     h = model.host
-    e, rest = h["elements"].astype(np.int64), h["element_params"][:, 0].astype(np.float64)
     length = np.full(model.node_count, np.inf)
-    np.minimum.at(length, e[:, 0], rest)
-    np.minimum.at(length, e[:, 1], rest)
+    tri = h["triangles"].astype(np.int64).reshape(-1, 3)
+    if len(tri):
+        inverse = model.triangle_inv_rest.numpy().astype(np.float64)
+        det = inverse[:, 0, 0] * inverse[:, 1, 1] - inverse[:, 0, 1] * inverse[:, 1, 0]
+        ok = det != 0.0
+        edges = np.zeros_like(inverse)  # columns: the rest edges e1, e2 [m]
+        edges[ok, 0, 0], edges[ok, 1, 1] = inverse[ok, 1, 1] / det[ok], inverse[ok, 0, 0] / det[ok]
+        edges[ok, 0, 1], edges[ok, 1, 0] = -inverse[ok, 0, 1] / det[ok], -inverse[ok, 1, 0] / det[ok]
+        sides = np.stack([np.linalg.norm(edges[:, :, 0], axis=1), np.linalg.norm(edges[:, :, 1], axis=1),
+                          np.linalg.norm(edges[:, :, 1] - edges[:, :, 0], axis=1)], axis=1).min(axis=1)
+        sides[~ok | (sides <= 0.0)] = np.inf
+        for corner in range(3):
+            np.minimum.at(length, tri[:, corner], sides)
+    e, rest = h["elements"].astype(np.int64), h["element_params"][:, 0].astype(np.float64)
+    alone = np.isinf(length)
+    for end in range(2):
+        bare = alone[e[:, end]] & (rest > 0.0)
+        np.minimum.at(length, e[bare, end], rest[bare])
     return length
