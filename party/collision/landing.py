@@ -22,8 +22,8 @@ from .geometry import step_box
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
 LANDING_REACH = 0.5
-"""Largest distance [in units of the node's shortest element] that a node near a body may move
-relative to it in one (sub)step."""
+"""Largest distance, in units of the node's shortest element (:func:`shortest_element`), that a
+node near a body may move relative to it in one (sub)step."""
 
 MAX_LANDING_SUBSTEPS = 8
 """Most substeps a step is cut into for landing cloth."""
