@@ -8,7 +8,7 @@ import pytest
 
 from party.body import floor, sphere
 from party.collision import CollisionSettings
-from party.collision.landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, shortest_element
+from party.collision.landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, shortest_edge
 from party.collision.pipeline import CollisionPipeline
 from party.fabric import fabric_by_name
 from party.meshing import rectangular_net
@@ -62,7 +62,7 @@ def test_a_tie_shorter_than_the_net_does_not_set_the_reach():
     builder.add_cloth(net, fabric_by_name("cotton"), np.c_[net.uv, np.zeros(net.node_count)])
     builder.add_springs(np.array([[0, 7]]), stiffness=100.0, rest_length=1e-4)
     model = builder.finalize("cpu")
-    assert shortest_element(model) == pytest.approx(np.full(model.node_count, SPACING))
+    assert shortest_edge(model) == pytest.approx(np.full(model.node_count, SPACING))
 
 
 def warp_weft_stretch(grid: int, dt: float, seconds: float, landing: bool, monkeypatch) -> np.ndarray:

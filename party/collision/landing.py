@@ -7,7 +7,7 @@ step, and friction on the pressure of the stretched cloth then holds the stretch
 sheet dropped at 1.7 cm a step onto the benchmark's sphere kept 236 of its 8,064 warp and
 weft elements beyond 9 % (the limit is 10 %) after 1 s at 1/150 s a step, 25 at 1/300 s and 1
 at 1/1,200 s. Cutting only the steps in which a node near the body would move farther than
-:data:`LANDING_REACH` of its shortest element relative to the body left 41 and 9, in 171
+:data:`LANDING_REACH` of its shortest edge relative to the body left 41 and 9, in 171
 substeps for 150 steps and 306 for 300 (docs/design.md, the implicit solver).
 """
 
@@ -22,7 +22,7 @@ from .geometry import step_box
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
 LANDING_REACH = 0.5
-"""Largest distance, in units of the node's shortest element (:func:`shortest_element`), that a
+"""Largest distance, in units of the node's shortest edge (:func:`shortest_edge`), that a
 node near a body may move relative to it in one (sub)step."""
 
 MAX_LANDING_SUBSTEPS = 8
@@ -43,7 +43,7 @@ def landing_substeps(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), inv
                      most: wp.array(dtype=int)):
     """Raise ``most[0]`` to the substeps a step of ``dt`` [s] needs so that node i, where its step
     (grown by its thickness and ``margin`` [m]) meets the box of a body triangle in the BVH (swept
-    over the body's step), moves no more than ``reach`` times its shortest element ``length``
+    over the body's step), moves no more than ``reach`` times its shortest edge ``length``
     [m] relative to that triangle per substep. A node that cannot move so far relative to any
     body, slower than that by more than the bodies' fastest vertex (``body_speed[0]`` [m/s]),
     does not search."""
@@ -65,7 +65,7 @@ def landing_substeps(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), inv
         wp.atomic_max(most, 0, needed)
 
 
-def shortest_element(model: Model) -> np.ndarray:
+def shortest_edge(model: Model) -> np.ndarray:
     """Each node's shortest edge at rest [m]: of its cloth triangles (the net's spacing, not a
     tie such as a sewing spring), or of its elements where it has no triangle; infinite for a
     node with neither (it is never cut for)."""

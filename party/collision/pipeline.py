@@ -18,7 +18,7 @@ from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
                     gather_cloth_triangles_bvh, moved_beyond, respond_cloth, sum_motion)
 from .intervals import AxisIntervalLists
-from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, largest_speed, shortest_element
+from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, largest_speed, shortest_edge
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
@@ -262,7 +262,7 @@ class CollisionPipeline:
     def landing_substeps(self, state: State, dt: float) -> int:
         """Substeps (1 to :data:`~party.collision.landing.MAX_LANDING_SUBSTEPS`) a step of ``dt``
         [s] from ``state`` needs so that no node near a body moves farther than
-        :data:`~party.collision.landing.LANDING_REACH` of its shortest element relative to it
+        :data:`~party.collision.landing.LANDING_REACH` of its shortest edge relative to it
         in one substep (:mod:`party.collision.landing`; reads one number from the device). 1
         with the interval lists' broad phase, which only the explicit solver's short steps use."""
         if not self.has_body or not self.bvh:
@@ -274,7 +274,7 @@ class CollisionPipeline:
             launch(largest_speed, dim=len(state.collider_qd), inputs=[state.collider_qd, self._body_speed],
                    device=m.device)
         if self._node_length is None:
-            self._node_length = wp.array(shortest_element(m).astype(np.float32), dtype=float, device=m.device)
+            self._node_length = wp.array(shortest_edge(m).astype(np.float32), dtype=float, device=m.device)
         self._most.fill_(1)
         launch(landing_substeps, dim=m.node_count,
                inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self._node_length,
