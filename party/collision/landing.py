@@ -74,14 +74,11 @@ def shortest_edge(model: Model) -> np.ndarray:
     tri = h["triangles"].astype(np.int64).reshape(-1, 3)
     if len(tri):
         inverse = model.triangle_inv_rest.numpy().astype(np.float64)
-        det = inverse[:, 0, 0] * inverse[:, 1, 1] - inverse[:, 0, 1] * inverse[:, 1, 0]
-        ok = det != 0.0
-        edges = np.zeros_like(inverse)  # columns: the rest edges e1, e2 [m]
-        edges[ok, 0, 0], edges[ok, 1, 1] = inverse[ok, 1, 1] / det[ok], inverse[ok, 0, 0] / det[ok]
-        edges[ok, 0, 1], edges[ok, 1, 0] = -inverse[ok, 0, 1] / det[ok], -inverse[ok, 1, 0] / det[ok]
-        sides = np.stack([np.linalg.norm(edges[:, :, 0], axis=1), np.linalg.norm(edges[:, :, 1], axis=1),
-                          np.linalg.norm(edges[:, :, 1] - edges[:, :, 0], axis=1)], axis=1).min(axis=1)
-        sides[~ok | (sides <= 0.0)] = np.inf
+        ok = np.linalg.det(inverse) != 0.0  # a degenerate triangle's inverse was left 0
+        edges = np.linalg.inv(inverse[ok])  # columns: the rest edges e1, e2 [m]
+        sides = np.full(len(tri), np.inf)
+        sides[ok] = np.linalg.norm(np.stack([edges[:, :, 0], edges[:, :, 1], edges[:, :, 1] - edges[:, :, 0]],
+                                            axis=1), axis=2).min(axis=1)
         for corner in range(3):
             np.minimum.at(length, tri[:, corner], sides)
     e, rest = h["elements"].astype(np.int64), h["element_params"][:, 0].astype(np.float64)

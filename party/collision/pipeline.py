@@ -132,13 +132,13 @@ class CollisionPipeline:
         self._searched_again = wp.zeros(n, dtype=int, device=dev)
         self._most = wp.ones(1, dtype=int, device=dev)
         self._body_speed = wp.zeros(1, dtype=float, device=dev)
-        self._node_length: wp.array | None = None
         self._thickness = float(model.node_thickness.numpy().max())
         if self.has_body:
             colliders = model.host["colliders"]
             size = max(_triangle_size(c.vertices, c.faces) for c in colliders)
             if self.bvh:
                 self.body_tree = TriangleBvh(model.collider_faces)
+                self._node_length = wp.array(shortest_edge(model).astype(np.float32), dtype=float, device=dev)
             else:
                 self.body_lists = AxisIntervalLists(model.collider_faces, min_cell=size, max_cells=settings.max_cells)
             self.body_faces = wp.zeros((n, MAX_FACES), dtype=int, device=dev)
@@ -273,8 +273,6 @@ class CollisionPipeline:
             self.body_tree.build(state.collider_q, state.collider_qd, dt, 0.0)
             launch(largest_speed, dim=len(state.collider_qd), inputs=[state.collider_qd, self._body_speed],
                    device=m.device)
-        if self._node_length is None:
-            self._node_length = wp.array(shortest_edge(m).astype(np.float32), dtype=float, device=m.device)
         self._most.fill_(1)
         launch(landing_substeps, dim=m.node_count,
                inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self._node_length,
