@@ -175,9 +175,11 @@ def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
 
 
 def pulled_sheet_sweeps(serial: bool, seed: int):
-    """A 20 cm wool sheet pinned at a corner, its nodes pulled at random (30 m/s); returns the
-    sheet's pull and a function giving (sweeps, velocities) of one plastic limit over it at an
-    over-relaxation, on the CPU in one launch (``serial``) or one launch per colour."""
+    """A 20 cm wool sheet pinned at a corner, its nodes pulled at random (30 m/s) twice;
+    returns the first pull and a function giving, for an over-relaxation, the sweeps taken,
+    the velocities and the nodes each correction moved (``moved_in``) of two plastic limits,
+    one after each pull, by one StepEnd (so the second limit starts where the first left its
+    bookkeeping), on the CPU in one launch (``serial``) or one launch per colour."""
     from party.fabric import wool_flannel
     from party.meshing import rectangular_net
     from party.solvers.step_end import StepEnd
@@ -187,48 +189,56 @@ def pulled_sheet_sweeps(serial: bool, seed: int):
     b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
     b.pin([0])
     model = b.finalize("cpu")
-    pull = np.random.default_rng(seed).normal(0.0, 30.0, (model.node_count, 3)).astype(np.float32)
+    pulls = np.random.default_rng(seed).normal(0.0, 30.0, (2, model.node_count, 3)).astype(np.float32)
 
-    def sweep(over_relaxation: float) -> tuple[int, np.ndarray]:
+    def sweep(over_relaxation: float) -> tuple[list[int], np.ndarray, np.ndarray]:
         end = StepEnd(model, None, plastic_passes=200)
         end._serial = serial
         state = model.state()
-        state.node_qd.assign(pull)
-        return end._apply_plastic_limit(state, 1e-3, over_relaxation), state.velocities()
+        sweeps, velocities, moved = [], [], []
+        for pull in pulls:
+            state.node_qd.assign(pull)
+            sweeps.append(end._apply_plastic_limit(state, 1e-3, over_relaxation))
+            velocities.append(state.velocities())
+            moved.append(end._moved_in.numpy() > 0)
+        return sweeps, np.array(velocities), np.array(moved)
 
-    return pull, sweep
+    return pulls[0], sweep
 
 
 @pytest.mark.parametrize("serial", [True, False])
 def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_sweeps(monkeypatch, serial):
     """Sweeps after the first leave out elements whose nodes no correction has changed since
-    the last sweep began; over a randomly pulled sheet, at both over-relaxations, they must give
-    the velocities of sweeps over every element to the bit, in as many sweeps."""
+    the last sweep began (on the CPU visiting only the elements queued for them); over a
+    randomly pulled sheet, pulled twice, at both over-relaxations, they must give the
+    velocities and moved nodes of sweeps over every element to the bit, in as many sweeps."""
     from party.solvers import step_end
 
     pull, sweep = pulled_sheet_sweeps(serial, seed=2)
     for over_relaxation in (1.0, step_end.PLASTIC_OVER_RELAXATION):
-        sweeps, skipping = sweep(over_relaxation)
+        sweeps, skipping, moved = sweep(over_relaxation)
         with monkeypatch.context() as patch:
             patch.setattr(step_end, "PLASTIC_SKIPS_UNCHANGED", False)
-            full_sweeps, full = sweep(over_relaxation)
-        assert sweeps == full_sweeps > 3
-        assert np.array_equal(skipping, full)
-        assert not np.array_equal(full, pull)
+            full_sweeps, full, full_moved = sweep(over_relaxation)
+        assert sweeps == full_sweeps and min(sweeps) > 3
+        assert np.array_equal(skipping, full) and np.array_equal(moved, full_moved)
+        assert not np.array_equal(full[0], pull)
 
 
 def test_plastic_sweeps_in_one_launch_end_bit_for_bit_as_sweeps_launched_by_colour():
     """On the CPU all of a plastic limit's sweeps run in one single-thread launch; over a
-    randomly pulled sheet, at both over-relaxations, that gives the velocities of one launch
-    per colour with a read of the count after each sweep, to the bit, in as many sweeps."""
+    randomly pulled sheet, pulled twice, at both over-relaxations, that gives the velocities
+    and moved nodes of one launch per colour with a read of the count after each sweep, to
+    the bit, in as many sweeps."""
     from party.solvers.step_end import PLASTIC_OVER_RELAXATION
 
     (pull, in_one_launch), (_, by_colour) = pulled_sheet_sweeps(True, seed=3), pulled_sheet_sweeps(False, seed=3)
     for over_relaxation in (1.0, PLASTIC_OVER_RELAXATION):
-        one_launch_sweeps, fused = in_one_launch(over_relaxation)
-        colour_sweeps, launched = by_colour(over_relaxation)
-        assert one_launch_sweeps == colour_sweeps > 3
-        assert np.array_equal(fused, launched) and not np.array_equal(fused, pull)
+        one_launch_sweeps, fused, fused_moved = in_one_launch(over_relaxation)
+        colour_sweeps, launched, launched_moved = by_colour(over_relaxation)
+        assert one_launch_sweeps == colour_sweeps and min(one_launch_sweeps) > 3
+        assert np.array_equal(fused, launched) and np.array_equal(fused_moved, launched_moved)
+        assert not np.array_equal(fused[0], pull)
 
 
 def test_elements_placed_beyond_their_limit_yield_to_the_placement():

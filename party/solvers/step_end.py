@@ -14,6 +14,7 @@ from ..model import Model, State
 from .explicit.kernels import (PlasticLimit, advance_positions, cap_speed, next_sweep, plastic_limit,
                                plastic_limit_sweeps)
 from .hysteresis import BendingHysteresis
+from .limit_worklists import limit_worklists, plastic_limit_worklists
 
 PLASTIC_TOLERANCE = 5.0e-5
 """Relative length beyond the plastic limit left to the next step's sweeps (0.005 %)."""
@@ -87,6 +88,7 @@ class StepEnd:
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = len(model.element_colored) > 0
         self._limit = plastic_limit_of(model)
+        self._worklists = limit_worklists(model) if self._has_limit else None
         self._serial = wp.get_device(model.device).is_cpu
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
         guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
@@ -128,7 +130,8 @@ class StepEnd:
         correction scaled by ``over_relaxation``. Caps the speeds at ``max_speed`` after, where
         one is set. Returns the number of sweeps.
 
-        On the CPU every sweep runs in one launch of one thread (:func:`plastic_limit_sweeps`):
+        On the CPU every sweep runs in one launch of one thread (:func:`plastic_limit_sweeps`;
+        with :data:`PLASTIC_SKIPS_UNCHANGED`, over worklists: :mod:`.limit_worklists`):
         Warp runs a CPU launch's threads one after another anyway, so that is the same sweeps as
         one launch per colour, without the launches and the read of the count between sweeps
         (some 15 us per launch, which made the plastic limit a third of a garment drape's time;
@@ -141,9 +144,12 @@ class StepEnd:
         m = self.model
         self._moved_in.zero_()
         if self._serial:
-            launch(plastic_limit_sweeps, dim=1,
-                   inputs=[self._limit, state.node_q, state.node_qd, dt, float(over_relaxation),
-                           int(self.plastic_passes), self._moved_in, self._sweep_number], device=m.device)
+            fields = [state.node_q, state.node_qd, dt, float(over_relaxation), int(self.plastic_passes), self._moved_in,
+                      self._sweep_number]
+            if PLASTIC_SKIPS_UNCHANGED:
+                launch(plastic_limit_worklists, dim=1, inputs=[self._limit, self._worklists, *fields], device=m.device)
+            else:
+                launch(plastic_limit_sweeps, dim=1, inputs=[self._limit, *fields], device=m.device)
             sweeps = int(self._sweep_number.numpy()[0])
         else:
             sweeps = self._sweep_by_colour(state, dt, over_relaxation)
