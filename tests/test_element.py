@@ -7,6 +7,7 @@ import pytest
 
 from party.model import ModelBuilder
 from party.solvers import SolverExplicit
+from party.solvers.limit_worklists import EPOCH_LIMIT
 from conftest import simulate
 
 
@@ -174,12 +175,13 @@ def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
     assert np.all(length <= limit * (1.0 + 2 * PLASTIC_TOLERANCE))
 
 
-def pulled_sheet_sweeps(serial: bool, seed: int):
+def pulled_sheet_sweeps(serial: bool, seed: int, epoch: int | None = None):
     """A 20 cm wool sheet pinned at a corner, its nodes pulled at random (30 m/s) twice;
     returns the first pull and a function giving, for an over-relaxation, the sweeps taken,
     the velocities and the nodes each correction moved (``moved_in``) of two plastic limits,
     one after each pull, by one StepEnd (so the second limit starts where the first left its
-    bookkeeping), on the CPU in one launch (``serial``) or one launch per colour."""
+    bookkeeping), on the CPU in one launch (``serial``; the second limit's worklists counting
+    their sweeps on from ``epoch`` where given) or one launch per colour."""
     from party.fabric import wool_flannel
     from party.meshing import rectangular_net
     from party.solvers.step_end import StepEnd
@@ -196,7 +198,9 @@ def pulled_sheet_sweeps(serial: bool, seed: int):
         end._serial = serial
         state = model.state()
         sweeps, velocities, moved = [], [], []
-        for pull in pulls:
+        for k, pull in enumerate(pulls):
+            if k == 1 and epoch is not None:
+                end._worklists.epoch.fill_(epoch)
             state.node_qd.assign(pull)
             sweeps.append(end._apply_plastic_limit(state, 1e-3, over_relaxation))
             velocities.append(state.velocities())
@@ -206,15 +210,16 @@ def pulled_sheet_sweeps(serial: bool, seed: int):
     return pulls[0], sweep
 
 
-@pytest.mark.parametrize("serial", [True, False])
-def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_sweeps(monkeypatch, serial):
+@pytest.mark.parametrize("serial, epoch", [(True, None), (True, int(EPOCH_LIMIT) + 1), (False, None)])
+def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_sweeps(monkeypatch, serial, epoch):
     """Sweeps after the first leave out elements whose nodes no correction has changed since
-    the last sweep began (on the CPU visiting only the elements queued for them); over a
-    randomly pulled sheet, pulled twice, at both over-relaxations, they must give the
-    velocities and moved nodes of sweeps over every element to the bit, in as many sweeps."""
+    the last sweep began (on the CPU visiting only the elements queued for them, also where
+    the second limit starts their marks again); over a randomly pulled sheet, pulled twice, at
+    both over-relaxations, they must give the velocities and moved nodes of sweeps over every
+    element to the bit, in as many sweeps."""
     from party.solvers import step_end
 
-    pull, sweep = pulled_sheet_sweeps(serial, seed=2)
+    pull, sweep = pulled_sheet_sweeps(serial, seed=2, epoch=epoch)
     for over_relaxation in (1.0, step_end.PLASTIC_OVER_RELAXATION):
         sweeps, skipping, moved = sweep(over_relaxation)
         with monkeypatch.context() as patch:

@@ -24,6 +24,10 @@ from .explicit.kernels import PlasticLimit, limit_element
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
+EPOCH_LIMIT = wp.constant(1 << 30)
+"""Sweep count at which the worklists' marks start again from zero (some 15 million steps of a
+garment drape), well short of a 32-bit integer's range."""
+
 
 @wp.struct
 class LimitWorklists:
@@ -35,7 +39,8 @@ class LimitWorklists:
     slots): the slots queued for the sweeps of even and odd number, colour c's from
     ``color_offsets[c]``, ``counts`` (2, colours) of them. ``queued`` (2, slots): the sweep a
     slot was last queued for, counted on from launch to launch through ``epoch[0]``, so that
-    no mark of an earlier step can pass for one of this step."""
+    no mark of an earlier step can pass for one of this step (cleared, with the count, once it
+    passes :data:`EPOCH_LIMIT`)."""
 
     color_offsets: wp.array(dtype=int)
     slot_color: wp.array(dtype=int)
@@ -53,7 +58,7 @@ def limit_worklists(model: Model) -> LimitWorklists:
     slots = int(offsets[-1])
     colored = model.element_colored.numpy()
     nodes = model.element_nodes.numpy()[colored]
-    slot_of_node = np.repeat(np.arange(slots, dtype=np.int32), 2)
+    slot_of_end = np.repeat(np.arange(slots, dtype=np.int32), 2)
     by_node = nodes.reshape(-1)
     order = np.argsort(by_node, kind="stable")
     counts = np.bincount(by_node, minlength=model.node_count)
@@ -63,7 +68,7 @@ def limit_worklists(model: Model) -> LimitWorklists:
     work.slot_color = wp.array(np.repeat(np.arange(len(offsets) - 1, dtype=np.int32), np.diff(offsets)),
                                dtype=int, device=dev)
     work.node_slot_offsets = wp.array(np.r_[0, np.cumsum(counts)].astype(np.int32), dtype=int, device=dev)
-    work.node_slots = wp.array(slot_of_node[order], dtype=int, device=dev)
+    work.node_slots = wp.array(slot_of_end[order], dtype=int, device=dev)
     work.lists = wp.zeros((2, max(slots, 1)), dtype=int, device=dev)
     work.counts = wp.zeros((2, max(len(offsets) - 1, 1)), dtype=int, device=dev)
     work.queued = wp.zeros((2, max(slots, 1)), dtype=int, device=dev)
@@ -100,7 +105,8 @@ def _visit(limit: PlasticLimit, work: LimitWorklists, slot: int, color: int, x: 
     before_i = moved_in[pair[0]]
     before_k = moved_in[pair[1]]
     beyond = limit_element(limit, e, x, v, dt, over_relaxation, sweep, moved_in)
-    if moved_in[pair[0]] != before_i:  # moved by an earlier colour already, it has queued its elements
+    # a mark left as it was: not moved, or moved earlier in this sweep, which queued its elements then
+    if moved_in[pair[0]] != before_i:
         _queue(work, pair[0], color, mark, now, later)
     if moved_in[pair[1]] != before_k:
         _queue(work, pair[1], color, mark, now, later)
@@ -117,6 +123,11 @@ def plastic_limit_worklists(limit: PlasticLimit, work: LimitWorklists, x: wp.arr
     docstring); the number of sweeps taken goes to ``sweeps[0]``."""
     colors = work.color_offsets.shape[0] - 1
     base = work.epoch[0]
+    if base > EPOCH_LIMIT:
+        for slot in range(work.queued.shape[1]):
+            work.queued[0, slot] = 0
+            work.queued[1, slot] = 0
+        base = 0
     sweep = int(0)
     while sweep < max_sweeps:
         sweep += 1
