@@ -20,6 +20,7 @@ import numpy as np
 import warp as wp
 
 from ..model import Model
+from ..model.csr import csr_order
 from .explicit.kernels import PlasticLimit, limit_element
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
@@ -57,17 +58,14 @@ def limit_worklists(model: Model) -> LimitWorklists:
     offsets = np.asarray(model.element_color_offsets, dtype=np.int32)
     slots = int(offsets[-1])
     colored = model.element_colored.numpy()
-    nodes = model.element_nodes.numpy()[colored]
+    node_offsets, order = csr_order(model.element_nodes.numpy()[colored].reshape(-1), model.node_count)
     slot_of_end = np.repeat(np.arange(slots, dtype=np.int32), 2)
-    by_node = nodes.reshape(-1)
-    order = np.argsort(by_node, kind="stable")
-    counts = np.bincount(by_node, minlength=model.node_count)
     dev = model.device
     work = LimitWorklists()
     work.color_offsets = wp.array(offsets, dtype=int, device=dev)
     work.slot_color = wp.array(np.repeat(np.arange(len(offsets) - 1, dtype=np.int32), np.diff(offsets)),
                                dtype=int, device=dev)
-    work.node_slot_offsets = wp.array(np.r_[0, np.cumsum(counts)].astype(np.int32), dtype=int, device=dev)
+    work.node_slot_offsets = wp.array(node_offsets.astype(np.int32), dtype=int, device=dev)
     work.node_slots = wp.array(slot_of_end[order], dtype=int, device=dev)
     work.lists = wp.zeros((2, max(slots, 1)), dtype=int, device=dev)
     work.counts = wp.zeros((2, max(len(offsets) - 1, 1)), dtype=int, device=dev)

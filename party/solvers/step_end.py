@@ -88,8 +88,8 @@ class StepEnd:
         self._moving_colliders = bool(np.any(model.collider_velocity != 0.0))
         self._has_limit = len(model.element_colored) > 0
         self._limit = plastic_limit_of(model)
-        self._worklists = limit_worklists(model) if self._has_limit else None
         self._serial = wp.get_device(model.device).is_cpu
+        self._worklists = limit_worklists(model) if self._has_limit and self._serial else None  # CPU sweeps only
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
         guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
         self.guard = CrossingGuard(model, collision.guard_every) if guarded else None
