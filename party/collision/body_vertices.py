@@ -206,6 +206,8 @@ def respond_body_vertices(
     accumulated into ``dv``, ``dx``, ``hits``. Skips a triangle whose nodes the last pass left
     ``settled`` (see :meth:`~party.collision.pipeline.CollisionPipeline.apply`)."""
     t = wp.tid()
+    if candidate_count[t] == 0:
+        return
     a = tris[t, 0]
     b = tris[t, 1]
     c = tris[t, 2]

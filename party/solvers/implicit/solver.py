@@ -10,7 +10,7 @@ import warp as wp
 
 from ...collision import CollisionSettings
 from ...errors import InvalidInput
-from ...launch import launch, launch_workers, worker_count, worker_sync
+from ...launch import launch, launch_items, launch_workers, worker_count, worker_sync
 from ...model import Control, Model, State
 from ...model.csr import csr_order
 from ..aero import Air, AirForces
@@ -230,11 +230,11 @@ class SolverImplicit:
         m = self.model
         dev = m.device
         if self._planes:
-            launch(body_planes, dim=m.node_count,
-                   inputs=[self.collision.body_contact_face, m.collider_faces, state_in.collider_q,
-                           state_in.collider_qd, state_in.node_q, m.node_thickness, self.collision.body_faces,
-                           self.collision.body_face_count, dt],
-                   outputs=[self._plane_normal, self._plane_offset, self.collision.body_solve_push], device=dev)
+            launch_items(body_planes, 0, m.node_count,
+                         [self.collision.body_contact_face, m.collider_faces, state_in.collider_q,
+                          state_in.collider_qd, state_in.node_q, m.node_thickness, self.collision.body_faces,
+                          self.collision.body_face_count, dt, self._plane_normal, self._plane_offset,
+                          self.collision.body_solve_push], dev)
         launch(inertial_target, dim=m.node_count,
                inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
                        control.kinematic_velocity, self._correction, self._plane_normal, dt],
