@@ -4,11 +4,11 @@
     python blender_sphere.py -- N SELF OUT.npz [SECONDS]
 
 A 1 m cloth of N x N vertices 0.32 m above a static sphere (r = 0.3 m) at the origin, Z up,
-SECONDS (default 1) at 30 frames per second, quality 5 (Blender's defaults otherwise, a cotton-like cloth),
-collision distance 4 mm: Blender keeps cloth its own distance plus the collision object's outer
-thickness off a body (its default thickness, 0.02 m, held the cloth 19 mm off the sphere, where
-party's and Newton's rest 3 mm off it), so the sphere gets Blender's thinnest, 1 mm, and the
-cloth 3 mm of its own. Writes the final vertex positions [m], the set-up seconds and the
+SECONDS (default 1) at 30 frames per second, quality 5, collision distance 4 mm (Blender's
+defaults otherwise, a cotton-like cloth). Blender keeps cloth its own distance plus the collision
+object's outer thickness off a body (its default thickness, 0.02 m, held the cloth 19 mm off the
+sphere, where party's and Newton's rest about 3 mm off it), so the sphere gets Blender's thinnest,
+1 mm, the cloth 3 mm of its own, and the cloth :data:`COLLISION_QUALITY` collision passes. Writes the final vertex positions [m], the set-up seconds and the
 simulation wall seconds to OUT.npz, with the grid's quads split into triangles.
 """
 import sys
@@ -45,7 +45,7 @@ modifier.settings.quality = 5
 modifier.collision_settings.collision_quality = COLLISION_QUALITY
 modifier.collision_settings.use_self_collision = self_collision
 modifier.collision_settings.distance_min = DISTANCE - OUTER_THICKNESS
-modifier.collision_settings.self_distance_min = 0.004
+modifier.collision_settings.self_distance_min = DISTANCE
 modifier.point_cache.frame_end = last
 setup = time.perf_counter() - t0
 t = time.perf_counter()
