@@ -8,8 +8,9 @@ SECONDS (default 1) at 30 frames per second, quality 5, collision distance 4 mm 
 defaults otherwise, a cotton-like cloth). Blender keeps cloth its own distance plus the collision
 object's outer thickness off a body (its default thickness, 0.02 m, held the cloth 19 mm off the
 sphere, where party's and Newton's rest about 3 mm off it), so the sphere gets Blender's thinnest,
-1 mm, the cloth 3 mm of its own, and the cloth :data:`COLLISION_QUALITY` collision passes. Writes the final vertex positions [m], the set-up seconds and the
-simulation wall seconds to OUT.npz, with the grid's quads split into triangles.
+1 mm, and the cloth 3 mm of its own and :data:`COLLISION_QUALITY` collision passes a step.
+Writes the final vertex positions [m], the set-up seconds and the simulation wall seconds to
+OUT.npz, with the grid's quads split into triangles.
 """
 import sys
 import time

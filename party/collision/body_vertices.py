@@ -203,8 +203,8 @@ def respond_body_vertices(
     triangle (off it sideways by no more than the body response's tolerance,
     :data:`~party.collision.body.EDGE_TOLERANCE` eps) and no deeper than eps behind the vertex:
     stop the point's approach and move its start out so that the step ends at the gap,
-    accumulated into ``dv``, ``dx``, ``hits``. Skips a triangle whose nodes the last pass left
-    ``settled`` (see :meth:`~party.collision.pipeline.CollisionPipeline.apply`)."""
+    accumulated into ``dv``, ``dx``, ``hits``. Skips a triangle without candidates, and one whose
+    nodes the last pass left ``settled`` (see :meth:`~party.collision.pipeline.CollisionPipeline.apply`)."""
     t = wp.tid()
     if candidate_count[t] == 0:
         return
