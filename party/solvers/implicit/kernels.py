@@ -150,6 +150,14 @@ def moved(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: in
 
 
 @wp.func
+def moved_from(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: int, xi: wp.vec3,
+               di: wp.vec3) -> wp.vec3:
+    """:func:`moved` with node i's start ``xi`` and displacement ``di`` [m] read once for all
+    its neighbours k."""
+    return (x_start[k] - xi) + (disp[k] - di)
+
+
+@wp.func
 def moved_curvature(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), n: wp.vec4i,
                     w: wp.vec4) -> wp.vec3:
     """A bending stencil's curvature vector sum_i K_i x_i at the iterate [1/m], as
@@ -251,24 +259,26 @@ class NodeStep:
 def node_terms(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
                disp: wp.array(dtype=wp.vec3)) -> NodeStep:
     """The gradient and Hessian block that :func:`descend_node` steps on."""
+    xi = x_start[i]
     di = disp[i]
-    h2 = dt * dt
-    m = terms.mass[i]
-    grad = (m / h2) * (di - terms.y[i])
-    hess = (m / h2) * wp.identity(n=3, dtype=float)
+    inv_dt = 1.0 / dt
+    inertia = terms.mass[i] * inv_dt * inv_dt
+    grad = inertia * (di - terms.y[i])
+    hess = inertia * wp.identity(n=3, dtype=float)
     diagonal = float(0.0)
     for j in range(terms.spring_offsets[i], terms.spring_offsets[i + 1]):
         k = terms.spring_other[j]
         p = terms.spring_params[j]
-        d = moved(x_start, disp, k, i)
+        d = moved_from(x_start, disp, k, xi, di)
         length = wp.length(d)
         if length > 1.0e-12:
-            u = d / length
+            inv_length = 1.0 / length
+            u = d * inv_length
             grad -= p[1] * (length - p[0]) * u
-            slack = wp.max(0.0, 1.0 - p[0] / length)
+            slack = wp.max(0.0, 1.0 - p[0] * inv_length)
             hess += (p[1] * (1.0 - slack)) * wp.outer(u, u)
             diagonal += p[1] * slack
-        c = p[2] / dt
+        c = p[2] * inv_dt
         grad -= c * (disp[k] - di)
         diagonal += c
     for j in range(terms.bend_offsets[i], terms.bend_offsets[i + 1]):
@@ -276,7 +286,7 @@ def node_terms(i: int, terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt
         if k == i:
             diagonal += terms.bend_values[j]
         else:
-            grad += terms.bend_values[j] * moved(x_start, disp, k, i)
+            grad += terms.bend_values[j] * moved_from(x_start, disp, k, xi, di)
     for j in range(terms.tri_offsets[i], terms.tri_offsets[i + 1]):
         slot = terms.tri_slots[j]
         t = slot // 3
