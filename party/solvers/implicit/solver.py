@@ -289,6 +289,7 @@ class SolverImplicit:
         terms.bend_offsets, terms.bend_nodes = self._bend_offsets, self._bend_nodes
         terms.bend_values = self._bend_values
         terms.tri_offsets, terms.tri_slots, terms.tris = self._tri_offsets, self._tri_slots, m.triangle_nodes
+        terms.has_extra = int(self._tri_slots.shape[0] > 0 or self._sliding)
         terms.inv_rest, terms.membrane_area, terms.membrane_c = (m.triangle_inv_rest, m.triangle_membrane_area,
                                                                  m.triangle_membrane_c)
         terms.slider_offsets, terms.slider_slots = self._slider_offsets, self._slider_slots
