@@ -178,7 +178,7 @@ def collide_body(
     :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes. The
     face of the contact goes to ``contact_face`` (the implicit solver's next solve keeps the
     node on its side of that face's plane). ``solve_push`` [m/s] is the velocity that plane's
-    reaction gave the node in the solve (:func:`~party.solvers.implicit.kernels.plane_reactions`):
+    reaction gave the node in the solve (``plane_reactions`` of :mod:`party.solvers.implicit.descent`):
     the first pass finds the contact with the node's velocity without it, as the node would
     have struck the body, and the friction cone takes it as normal impulse (not the bounce); it
     is used once and cleared, and the node is not settled for the next pass, which may answer

@@ -17,8 +17,8 @@ from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
-from .kernels import (DescentTerms, block_descent, body_planes, chebyshev_blend, inertial_target, onto_planes,
-                      plane_reactions, record_correction, step_velocity, sweep_workers)
+from .descent import DESCENT, DescentTerms
+from .kernels import body_planes, chebyshev_blend, inertial_target, onto_planes, record_correction, step_velocity
 
 
 SLIDER_STEP_RATIO = 600.0
@@ -136,6 +136,7 @@ class SolverImplicit:
         self._sync = worker_sync(dev)
         self.workers = worker_count(len(colored), dev)
         self._terms = self._descent_terms()
+        self._descent = DESCENT[len(tri_slots) > 0 or self._sliding]
         self._graphs: dict = {}
         self._capture = True
 
@@ -245,14 +246,15 @@ class SolverImplicit:
                    device=dev)
         wp.copy(self._d_before, self._d)
         if self.workers > 1:
-            launch_workers(sweep_workers, self.workers, self._sync,
+            launch_workers(self._descent.sweep_workers, self.workers, self._sync,
                            [self.sweeps(dt), self._color_offsets, self._omegas(dt)[1], self._colored, self._terms,
                             state_in.node_q, dt, self._d, self._d_previous, self._d_before], dev)
         else:
             self._sweep_by_colour(state_in.node_q, dt)
         if self._planes:
             launch(onto_planes, dim=m.node_count, inputs=[self._terms, state_in.node_q, self._d], device=dev)
-            launch(plane_reactions, dim=m.node_count, inputs=[self._terms, state_in.node_q, dt, self._d], device=dev)
+            launch(self._descent.plane_reactions, dim=m.node_count,
+                   inputs=[self._terms, state_in.node_q, dt, self._d], device=dev)
         launch(record_correction, dim=m.node_count,
                inputs=[self._d, self._y, self._terms.plane_push, dt, self._correction], device=dev)
         launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._d, dt],
@@ -261,13 +263,13 @@ class SolverImplicit:
     def _sweep_by_colour(self, x_start: wp.array, dt: float) -> None:
         """The sweeps as one launch per colour and one per Chebyshev blend (on one CPU thread,
         recorded into the solve's graph, or on CUDA; several CPU threads take
-        :func:`~party.solvers.implicit.kernels.sweep_workers` instead)."""
+        ``sweep_workers`` of :mod:`.descent` instead)."""
         offsets = self.color_offsets
         omegas = self._omegas(dt)[0]
         dev = self.model.device
         for iteration in range(self.sweeps(dt)):
             for c in range(len(offsets) - 1):
-                launch(block_descent, offsets[c + 1] - offsets[c],
+                launch(self._descent.block_descent, offsets[c + 1] - offsets[c],
                        [offsets[c], self._colored, self._terms, x_start, dt, self._d], device=dev)
             if len(omegas) == 0:
                 continue
@@ -289,7 +291,6 @@ class SolverImplicit:
         terms.bend_offsets, terms.bend_nodes = self._bend_offsets, self._bend_nodes
         terms.bend_values = self._bend_values
         terms.tri_offsets, terms.tri_slots, terms.tris = self._tri_offsets, self._tri_slots, m.triangle_nodes
-        terms.has_extra = int(self._tri_slots.shape[0] > 0 or self._sliding)
         terms.inv_rest, terms.membrane_area, terms.membrane_c = (m.triangle_inv_rest, m.triangle_membrane_area,
                                                                  m.triangle_membrane_c)
         terms.slider_offsets, terms.slider_slots = self._slider_offsets, self._slider_slots
