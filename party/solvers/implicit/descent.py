@@ -23,18 +23,18 @@ given no friction either."""
 
 
 @wp.func
-def moved(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: int, i: int) -> wp.vec3:
-    """x_k - x_i at the iterate, (x_k(t) - x_i(t)) + (d_k - d_i) [m]: both differences of
-    nearby numbers, so that neither loses a displacement to a position's round-off."""
-    return (x_start[k] - x_start[i]) + (disp[k] - disp[i])
+def moved_from(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: int, xi: wp.vec3,
+               di: wp.vec3) -> wp.vec3:
+    """x_k - x_i at the iterate, (x_k(t) - x_i(t)) + (d_k - d_i) [m], with node i's start ``xi``
+    and displacement ``di`` read once for all its neighbours k: both differences of nearby
+    numbers, so that neither loses a displacement to a position's round-off."""
+    return (x_start[k] - xi) + (disp[k] - di)
 
 
 @wp.func
-def moved_from(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: int, xi: wp.vec3,
-               di: wp.vec3) -> wp.vec3:
-    """:func:`moved` with node i's start ``xi`` and displacement ``di`` [m] read once for all
-    its neighbours k."""
-    return (x_start[k] - xi) + (disp[k] - di)
+def moved(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.vec3), k: int, i: int) -> wp.vec3:
+    """:func:`moved_from` for node i read from the arrays."""
+    return moved_from(x_start, disp, k, x_start[i], disp[i])
 
 
 @wp.func
@@ -86,10 +86,11 @@ def membrane_gradient(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.
 
 @wp.struct
 class DescentTerms:
-    """What a node's block descent (``descend_node`` of :func:`descent_kernels`) reads besides the positions: the
-    inertial targets ``y`` [m], masses [kg], each node's elements (``spring_*``), bending rows
-    (``bend_*``), membrane triangles (``tri_*``, ``tris``, ``inv_rest``, ``membrane_*``) and
-    bending-hysteresis sliders (``slider_*``, ``hinge_*``, ``slip_world``); set up once per solver."""
+    """What a node's block descent (``descend_node`` of :func:`descent_kernels`) reads besides
+    the positions: the inertial targets ``y`` [m], masses [kg], each node's elements
+    (``spring_*``), bending rows (``bend_*``), membrane triangles (``tri_*``, ``tris``,
+    ``inv_rest``, ``membrane_*``) and bending-hysteresis sliders (``slider_*``, ``hinge_*``,
+    ``slip_world``); set up once per solver."""
 
     y: wp.array(dtype=wp.vec3)
     mass: wp.array(dtype=float)
@@ -281,11 +282,12 @@ def descent_kernels(with_extra: bool) -> DescentKernels:
     def plane_reactions(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
                         disp: wp.array(dtype=wp.vec3)):
         """The reaction of each node's body plane at the solve's end, lambda = n . grad G_i [N]
-        where the node lies on the plane (within :data:`PLANE_CONTACT`) and grad G_i presses it into the plane (a
-        node held by the plane at the minimum has grad G_i = lambda n; over a uniformly pressed
-        patch the lambdas sum to its weight's normal part, the internal forces cancelling), as
-        the velocity lambda dt / m along n that it gave the node, into ``plane_push``, for the
-        body response's friction (:func:`~party.collision.body.collide_body`)."""
+        where the node lies on the plane (within :data:`PLANE_CONTACT`) and grad G_i presses it
+        into the plane (a node held by the plane at the minimum has grad G_i = lambda n; over a
+        uniformly pressed patch the lambdas sum to its weight's normal part, the internal forces
+        cancelling), as the velocity lambda dt / m along n that it gave the node, into
+        ``plane_push``, for the body response's friction
+        (:func:`~party.collision.body.collide_body`)."""
         i = wp.tid()
         n = terms.plane_normal[i]
         if terms.inv_mass[i] == 0.0 or wp.length_sq(n) == 0.0:
