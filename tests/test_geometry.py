@@ -3,7 +3,7 @@
 import numpy as np
 import warp as wp
 
-from party.collision.geometry import segment_triangle_distance
+from party.collision.geometry import segment_triangle_distance, step_near, step_within
 
 
 @wp.kernel
@@ -23,6 +23,49 @@ def _sampled_distance(segment: np.ndarray, triangle: np.ndarray, n: int = 120) -
     u, v = u[keep], v[keep]
     on_triangle = triangle[0] + u[:, None] * (triangle[1] - triangle[0]) + v[:, None] * (triangle[2] - triangle[0])
     return float(np.sqrt(((on_segment[:, None, :] - on_triangle[None, :, :]) ** 2).sum(-1)).min())
+
+
+@wp.kernel
+def _steps_kept(steps: wp.array(dtype=wp.vec3, ndim=2), margin: float, near: wp.array(dtype=int),
+                within: wp.array(dtype=int)):
+    k = wp.tid()
+    near[k] = int(step_near(steps[k, 0], steps[k, 1], steps[k, 2], steps[k, 3], margin))
+    within[k] = int(step_within(steps[k, 0], steps[k, 1], steps[k, 2], steps[k, 3], margin))
+
+
+def _point_segment_distance(p: np.ndarray, a: np.ndarray, step: np.ndarray) -> np.ndarray:
+    t = np.clip(((p - a) * step).sum(-1) / np.maximum((step * step).sum(-1), 1e-30), 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[..., None] * step), axis=-1)
+
+
+def test_a_step_near_the_searched_step_stays_within_the_reach_its_candidates_were_kept_by():
+    """step_near: every point of an accepted step lies within the margin of the searched step's
+    segment, hence within its length plus the margin of where it was searched from (the bound
+    keep_candidate keeps triangles by); the box test reaches sqrt(3) times the margin."""
+    rng = np.random.default_rng(5)
+    margin = 2.0e-3
+    n = 4000
+    ref = rng.uniform(-0.01, 0.01, (n, 3))
+    ref_step = rng.normal(0.0, 2.0e-3, (n, 3))
+    ref_step[:500] = 0.0  # a node searched at rest
+    start = ref + rng.uniform(0.0, 1.0, (n, 1)) * ref_step + rng.normal(0.0, 1.2e-3, (n, 3))
+    end = start + ref_step + rng.normal(0.0, 1.2e-3, (n, 3))
+    corner = np.array([ref[0] + margin, ref[0] + margin])  # a step at the box's corner
+    steps = np.stack([start, end, ref, ref_step], axis=1)
+    steps[0] = [corner[0], corner[1], ref[0], np.zeros(3)]
+    near, within = wp.zeros(n, dtype=int, device="cpu"), wp.zeros(n, dtype=int, device="cpu")
+    wp.launch(_steps_kept, dim=n, inputs=[wp.array(steps.astype(np.float32), dtype=wp.vec3, device="cpu"), margin,
+                                          near, within], device="cpu")
+    near, within = near.numpy().astype(bool), within.numpy().astype(bool)
+    s = np.linspace(0.0, 1.0, 50)[:, None, None]
+    on_step = steps[None, :, 0] + s * (steps[None, :, 1] - steps[None, :, 0])
+    farthest = _point_segment_distance(on_step, steps[None, :, 2], steps[None, :, 3]).max(axis=0)
+    assert np.all(farthest[near] <= margin * (1.0 + 1e-4))
+    assert np.all(farthest[~near] > margin * (1.0 - 1e-4))
+    reach = np.linalg.norm(on_step - steps[None, :, 2], axis=-1).max(axis=0)
+    assert np.all(reach[near] <= np.linalg.norm(steps[near, 3], axis=-1) + margin * (1.0 + 1e-4))
+    assert 0.2 < near.mean() < 0.8
+    assert within[0] and not near[0] and np.isclose(reach[0], np.sqrt(3.0) * margin)
 
 
 def test_segment_triangle_distance_is_the_smallest_distance_between_their_points():

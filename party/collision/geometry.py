@@ -73,6 +73,24 @@ def step_within(start: wp.vec3, end: wp.vec3, ref: wp.vec3, ref_step: wp.vec3, m
 
 
 @wp.func
+def step_near(start: wp.vec3, end: wp.vec3, ref: wp.vec3, ref_step: wp.vec3, margin: float) -> bool:
+    """Whether a step from ``start`` to ``end`` stays within ``margin`` [m] of the segment of the
+    step its candidates were searched for, from ``ref`` by ``ref_step`` (both ends do: the
+    points within a distance of a segment make a convex set). Each point of such a step lies
+    no farther than the searched step's length plus ``margin`` from ``ref``, the bound that
+    :func:`~party.collision.cloth.keep_candidate` kept triangles by; a box grown by the margin
+    (:func:`step_within`) reaches sqrt(3) times as far at its corners."""
+    length_sq = wp.dot(ref_step, ref_step)
+    s = float(0.0)
+    e = float(0.0)
+    if length_sq > 0.0:
+        s = wp.clamp(wp.dot(start - ref, ref_step) / length_sq, 0.0, 1.0)
+        e = wp.clamp(wp.dot(end - ref, ref_step) / length_sq, 0.0, 1.0)
+    return (wp.length(start - (ref + s * ref_step)) <= margin
+            and wp.length(end - (ref + e * ref_step)) <= margin)
+
+
+@wp.func
 def boxes_overlap(lo0: wp.vec3, hi0: wp.vec3, lo1: wp.vec3, hi1: wp.vec3) -> bool:
     return (lo0[0] <= hi1[0] and lo1[0] <= hi0[0] and lo0[1] <= hi1[1] and lo1[1] <= hi0[1]
             and lo0[2] <= hi1[2] and lo1[2] <= hi0[2])

@@ -38,8 +38,9 @@ class CollisionSettings:
             against the body, so no node ends a step inside it.
         search_margin: Extra reach of the interval-list search [m]. The triangles found are
             remembered and the search is repeated only once some node has moved half this
-            far (for the cloth's own triangles: beyond the motion common to all nodes), so a
-            larger margin means fewer searches but more candidates.
+            far (for the cloth's own triangles: beyond the motion common to all nodes, or some
+            node's step half this far from the step it was searched for), so a larger margin
+            means fewer searches but more candidates.
         max_cells: Largest number of intervals per axis in the interval lists.
         crossing_guard: Check steps' ends for edges newly through triangles and revert them
             (:mod:`party.collision.crossing_guard`).
@@ -196,11 +197,14 @@ class CollisionPipeline:
         triangles, for every node, once some node may have moved so, beyond the motion common to
         all nodes (:func:`~party.collision.cloth.moved_beyond`; this reads two flags from the
         device). ``continuing`` marks a second Collision() within one step (after the plastic
-        limit): its candidates also serve a node whose step stays within half the margin of
-        the box of the step they were searched for (:func:`~party.collision.body.covered`), and
-        only where the limit moved it beyond both is it searched again. (Reusing the step's
+        limit): the body's candidates also serve a node whose step stays within half the margin
+        of the box of the step they were searched for (:func:`~party.collision.body.covered`),
+        and only where the limit moved it beyond both is it searched again. (Reusing the step's
         candidates without this check, 14 of a 64 x 64 self-colliding drop's 300 steps had a
-        node's step beyond the region searched for the cloth, 21 for the body.)
+        node's step beyond the region searched for the cloth, 21 for the body.) The cloth's
+        serve, at either Collision(), while every node stays within half the margin of where it
+        was searched from, or every node's step within half the margin of the step it was
+        searched for.
 
         Each pass after the first leaves out what the last pass left as it was: a cloth triangle
         against the body's vertices whose nodes it did not change, a cloth contact none of whose
@@ -226,9 +230,9 @@ class CollisionPipeline:
             launch(sum_motion, dim=m.node_count, inputs=[x, v, self._x_ref, self._motion], device=dev)
             launch(moved_beyond, dim=m.node_count,
                    inputs=[x, v, self._x_ref, self._step_ref, self._motion, self._velocity_sum_ref,
-                           1.0 / m.node_count, dt, self.margin, int(continuing), self._flags], device=dev)
+                           1.0 / m.node_count, dt, self.margin, self._flags], device=dev)
             left = self._flags.numpy()
-            if not self._cloth_searched or (left[0] and (not continuing or left[1])):
+            if not self._cloth_searched or (left[0] and left[1]):
                 self._search_cloth(x, v, dt)
         if self.has_cloth:
             launch_items(detect_cloth, 0, m.node_count,
