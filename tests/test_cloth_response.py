@@ -288,3 +288,37 @@ def test_a_second_collision_of_a_step_searches_again_only_where_a_step_left_the_
     assert collision.searches == 2
     ends = x.numpy()[:, 2] + through.numpy()[:, 2] * dt
     assert (ends[upper] - ends[~upper]).min() >= 0.9 * wool_flannel().thickness
+
+
+@pytest.mark.parametrize("broad_phase", ["intervals", "bvh"])
+def test_a_step_proposed_again_from_where_the_cloth_stayed_keeps_its_candidates(broad_phase):
+    """Two layers 20 mm apart, the upper one proposing 10 mm down at every step from where it
+    stays (cloth held by its plastic limit while each step's solve pulls it on): the next step's
+    Collision() keeps the candidates, its steps lying on the step searched for (though each is
+    beyond half the margin); a step turned 5 mm sideways, 2.5 mm beyond the motion common to
+    both layers and so beyond half the margin of the step searched for, searches again; one reaching 30 mm, through the lower layer, too, and the
+    layers end the step a thickness apart."""
+    net, model, collision = two_layers(0.02, broad_phase)
+    state = model.state()
+    dt = 1.0 / 300.0
+    upper = np.arange(model.node_count) >= net.node_count
+    x = wp.array(model.host["points"].astype(np.float32), dtype=wp.vec3, device="cpu")
+
+    def velocities(down: float, sideways: float = 0.0) -> wp.array:
+        v = np.zeros((model.node_count, 3), np.float32)
+        v[upper, 2] = -down / dt
+        v[upper, 0] = sideways / dt
+        return wp.array(v, dtype=wp.vec3, device="cpu")
+
+    for searches in (1, 1, 1):
+        proposed = velocities(0.01)
+        collision.apply(x, proposed, state, dt)
+        assert collision.searches == searches and np.array_equal(proposed.numpy(), velocities(0.01).numpy())
+    assert 0.5 * collision.margin < 0.0025
+    collision.apply(x, velocities(0.01, 0.005), state, dt)
+    assert collision.searches == 2
+    through = velocities(0.03)
+    collision.apply(x, through, state, dt)
+    assert collision.searches == 3
+    ends = x.numpy()[:, 2] + through.numpy()[:, 2] * dt
+    assert (ends[upper] - ends[~upper]).min() >= 0.9 * wool_flannel().thickness
