@@ -26,15 +26,19 @@ def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float
 
 @wp.func
 def covered(x: wp.vec3, v: wp.vec3, dt: float, ref: wp.vec3, ref_step: wp.vec3, margin: float,
-            continuing: int) -> bool:
+            continuing: int, complete: bool) -> bool:
     """Whether a node's candidates still serve its step from ``x`` by ``v dt``: it stays within
     ``margin`` (half the search margin) of where it was searched from (:func:`still_covered`),
-    or, in a second Collision() of the same step (``continuing`` 1), of the box of the step it
-    was searched for (:func:`step_within`). Between steps only the first counts: lists kept
-    longer by the box went stale (see docs/design.md)."""
+    or of the box of the step it was searched for (:func:`step_within`). The box counts in a
+    second Collision() of the same step (``continuing`` 1), and between steps only where the
+    search kept all it found (``complete``): a full list holds what was nearest then (the 8
+    nearest body vertices of a cloth triangle), and another vertex may be nearer since. The
+    box's corners reach sqrt(3) times the margin from the searched step, within the two margins
+    the search allowed for, as only the cloth moves (a pair of cloth nodes and triangles needs
+    :func:`~party.collision.geometry.step_near`)."""
     if still_covered(x, v, ref, dt, margin):
         return True
-    return continuing != 0 and step_within(x, x + v * dt, ref, ref_step, margin)
+    return (continuing != 0 or complete) and step_within(x, x + v * dt, ref, ref_step, margin)
 
 
 @wp.kernel
@@ -63,7 +67,8 @@ def gather_body_faces(
     region searched (:func:`covered`) search again (the body must be static then, or
     ``continuing``); with ``continuing`` 1 they are marked in ``searched_again``."""
     i = first + wp.tid()
-    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing):
+    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing,
+                                   face_count[i] < MAX_FACES):
         return
     if continuing != 0:
         searched_again[i] = 1
@@ -115,7 +120,8 @@ def gather_body_faces_bvh(
     """:func:`gather_body_faces` with a BVH (:mod:`party.collision.bvh`) in place of the
     interval lists: the same box, the same triangles."""
     i = first + wp.tid()
-    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing):
+    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing,
+                                   face_count[i] < MAX_FACES):
         return
     if continuing != 0:
         searched_again[i] = 1

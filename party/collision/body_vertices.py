@@ -130,9 +130,10 @@ def gather_body_vertices(
     b = tris[t, 1]
     c = tris[t, 2]
     if everything == 0:
-        if (covered(x[a], v[a], dt, ref[t, 0], ref_step[t, 0], margin, continuing)
-                and covered(x[b], v[b], dt, ref[t, 1], ref_step[t, 1], margin, continuing)
-                and covered(x[c], v[c], dt, ref[t, 2], ref_step[t, 2], margin, continuing)):
+        complete = out_count[t] < MAX_VERTICES
+        if (covered(x[a], v[a], dt, ref[t, 0], ref_step[t, 0], margin, continuing, complete)
+                and covered(x[b], v[b], dt, ref[t, 1], ref_step[t, 1], margin, continuing, complete)
+                and covered(x[c], v[c], dt, ref[t, 2], ref_step[t, 2], margin, continuing, complete)):
             return
     if continuing != 0:
         searched_again[a] = 1
