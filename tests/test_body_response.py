@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from party.body import box, floor
+from party.body import box, floor, sphere
 from party.collision import CollisionSettings
 from party.errors import InvalidInput
 from party.fabric import wool_flannel
@@ -180,3 +180,46 @@ def test_a_second_collision_of_a_step_searches_the_body_again_where_a_step_left_
     assert collision.body_face_count.numpy()[0] > 0 and collision._searched_again.numpy()[0] == 1
     assert through.numpy()[0, 2] >= 0.0  # the approach stopped (eqs. 8-12: restitution sends it back up)
     assert x.numpy()[0, 2] + through.numpy()[0, 2] * dt >= EPS
+
+
+def test_a_complete_list_of_body_candidates_serves_the_next_step_within_the_box_searched():
+    """Between steps a node keeps its body candidates while its step stays within the box of
+    the step searched for, where the search kept all it found: a node 20 mm over a floor that
+    stepped 10 mm down keeps them for a step of 6 mm from the same place (beyond half the margin
+    of where it was searched from), and one reaching 30 mm down, through the floor, searches
+    again and is stopped. Over a finely meshed sphere, where the search found more triangles
+    than a list holds, a shortened step searches again."""
+    import warp as wp
+
+    from party.collision.body import MAX_FACES
+    from party.collision.pipeline import CollisionPipeline
+
+    dt = 1.0 / 300.0
+
+    def pipeline(collider, height):
+        b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+        b.add_node((0.0, 0.0, height), 1e-4, fabric=wool_flannel())
+        b.add_collider(collider)
+        model = b.finalize("cpu")
+        collision = CollisionPipeline(model, CollisionSettings(cloth=False, broad_phase="bvh"))
+        return model.state(), wp.array([[0.0, 0.0, height]], dtype=wp.vec3, device="cpu"), collision
+
+    def step_down(length: float) -> wp.array:
+        return wp.array([[0.0, 0.0, -length / dt]], dtype=wp.vec3, device="cpu")
+
+    state, x, collision = pipeline(floor(0.0, size=2.0), 0.02)
+    collision.apply(x, step_down(0.01), state, dt)
+    assert collision.body_face_count.numpy()[0] == 0
+    assert 0.006 > 0.5 * collision.margin
+    collision.apply(x, step_down(0.006), state, dt)
+    assert np.allclose(collision._body_step_ref.numpy()[0], [0.0, 0.0, -0.01])
+    through = step_down(0.03)
+    collision.apply(x, through, state, dt)
+    assert collision.body_face_count.numpy()[0] > 0 and through.numpy()[0, 2] >= 0.0
+    assert x.numpy()[0, 2] + through.numpy()[0, 2] * dt >= EPS
+
+    state, x, collision = pipeline(sphere(0.1, subdivisions=6), 0.108)
+    collision.apply(x, step_down(0.004), state, dt)
+    assert collision.body_face_count.numpy()[0] == MAX_FACES
+    collision.apply(x, step_down(0.003), state, dt)
+    assert np.allclose(collision._body_step_ref.numpy()[0], [0.0, 0.0, -0.003])
