@@ -296,8 +296,9 @@ def test_a_step_proposed_again_from_where_the_cloth_stayed_keeps_its_candidates(
     stays (cloth held by its plastic limit while each step's solve pulls it on): the next step's
     Collision() keeps the candidates, its steps lying on the step searched for (though each is
     beyond half the margin); a step turned 5 mm sideways, 2.5 mm beyond the motion common to
-    both layers and so beyond half the margin of the step searched for, searches again; one reaching 30 mm, through the lower layer, too, and the
-    layers end the step a thickness apart."""
+    both layers and so beyond half the margin of the step searched for, searches again; one
+    reaching 30 mm, through the lower layer, too, and the layers end the step a thickness
+    apart."""
     net, model, collision = two_layers(0.02, broad_phase)
     state = model.state()
     dt = 1.0 / 300.0
