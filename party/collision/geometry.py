@@ -80,14 +80,9 @@ def step_near(start: wp.vec3, end: wp.vec3, ref: wp.vec3, ref_step: wp.vec3, mar
     no farther than the searched step's length plus ``margin`` from ``ref``, the bound that
     :func:`~party.collision.cloth.keep_candidate` kept triangles by; a box grown by the margin
     (:func:`step_within`) reaches sqrt(3) times as far at its corners."""
-    length_sq = wp.dot(ref_step, ref_step)
-    s = float(0.0)
-    e = float(0.0)
-    if length_sq > 0.0:
-        s = wp.clamp(wp.dot(start - ref, ref_step) / length_sq, 0.0, 1.0)
-        e = wp.clamp(wp.dot(end - ref, ref_step) / length_sq, 0.0, 1.0)
-    return (wp.length(start - (ref + s * ref_step)) <= margin
-            and wp.length(end - (ref + e * ref_step)) <= margin)
+    ref_end = ref + ref_step
+    return (segment_segment_distance(start, start, ref, ref_end) <= margin
+            and segment_segment_distance(end, end, ref, ref_end) <= margin)
 
 
 @wp.func
