@@ -323,3 +323,39 @@ def test_a_step_proposed_again_from_where_the_cloth_stayed_keeps_its_candidates(
     assert collision.searches == 3
     ends = x.numpy()[:, 2] + through.numpy()[:, 2] * dt
     assert (ends[upper] - ends[~upper]).min() >= 0.9 * wool_flannel().thickness
+
+
+@pytest.mark.parametrize("broad_phase", ["intervals", "bvh"])
+def test_a_search_after_the_plastic_limit_covers_the_step_the_held_cloth_proposes_again(broad_phase):
+    """Two layers 13 mm apart. A patch of the upper one proposes 10 mm down, and the plastic
+    limit (as it were) holds it where it is; in that second Collision() a node elsewhere
+    steps 5 mm sideways, beyond both keep tests, and the cloth is searched again. That search
+    looks along the patch's proposed step, so the next step's first Collision(), the patch
+    proposing 11.5 mm down (1.5 mm short of the lower layer), keeps the candidates, and they
+    hold the lower layer: the patch ends the step a thickness above it."""
+    net, model, collision = two_layers(0.013, broad_phase)
+    state = model.state()
+    dt = 1.0 / 300.0
+    points = model.host["points"]
+    upper = np.arange(model.node_count) >= net.node_count
+    patch = upper & (np.abs(points[:, 0] - 0.05) < 0.015) & (np.abs(points[:, 1] - 0.05) < 0.015)
+    odd = np.flatnonzero(upper & (points[:, 0] < 1e-6) & (points[:, 1] < 1e-6))
+    assert patch.sum() == 9 and len(odd) == 1
+    x = wp.array(points.astype(np.float32), dtype=wp.vec3, device="cpu")
+
+    def velocities(down: float, sideways: float = 0.0) -> wp.array:
+        v = np.zeros((model.node_count, 3), np.float32)
+        v[patch, 2] = -down / dt
+        v[odd, 0] = sideways / dt
+        return wp.array(v, dtype=wp.vec3, device="cpu")
+
+    collision.apply(x, velocities(0.01), state, dt)
+    held = wp.array((patch | np.isin(np.arange(model.node_count), odd)).astype(np.int32), dtype=int, device="cpu")
+    collision.apply(x, velocities(0.0, 0.005), state, dt, continuing=True, changed=held)
+    assert collision.searches == 2
+    assert 0.5 * collision.margin < 0.005  # the sideways step leaves both tests
+    onward = velocities(0.0115, 0.005)
+    collision.apply(x, onward, state, dt)
+    assert collision.searches == 2
+    ends = x.numpy()[:, 2] + onward.numpy()[:, 2] * dt
+    assert ends[patch].min() >= 0.9 * wool_flannel().thickness

@@ -16,7 +16,7 @@ from .body_vertices import (MAX_VERTICES, gather_body_vertices, respond_body_ver
                             vertices_to_test)
 from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
-                    gather_cloth_triangles_bvh, moved_beyond, respond_cloth, sum_motion)
+                    gather_cloth_triangles_bvh, moved_beyond, respond_cloth, searched_velocity, sum_motion)
 from .intervals import AxisIntervalLists
 from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, largest_speed, shortest_edge
 
@@ -130,6 +130,8 @@ class CollisionPipeline:
         self._step_ref = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._motion = wp.zeros(2, dtype=wp.vec3, device=dev)
         self._velocity_sum_ref = wp.zeros(1, dtype=wp.vec3, device=dev)
+        self._proposed = wp.zeros(n, dtype=wp.vec3, device=dev)  # v at the step's first Collision()
+        self._searched_v = wp.zeros(n, dtype=wp.vec3, device=dev)
         self._searched_again = wp.zeros(n, dtype=int, device=dev)
         self._most = wp.ones(1, dtype=int, device=dev)
         self._body_speed = wp.zeros(1, dtype=float, device=dev)
@@ -204,7 +206,8 @@ class CollisionPipeline:
         node's step beyond the region searched for the cloth, 21 for the body.) The cloth's
         serve, at either Collision(), while every node stays within half the margin of where it
         was searched from, or every node's step within half the margin of the step it was
-        searched for.
+        searched for (a search in the second looks along the step the first had where the
+        node's present step lies near it: :func:`~party.collision.cloth.searched_velocity`).
 
         Each pass after the first leaves out what the last pass left as it was: a cloth triangle
         against the body's vertices whose nodes it did not change, a cloth contact none of whose
@@ -225,6 +228,8 @@ class CollisionPipeline:
         if self.has_body:
             self._search_body(x, v, state, dt, continuing)
         if self.has_cloth:
+            if not continuing:
+                wp.copy(self._proposed, v)
             self._motion.zero_()
             self._flags.zero_()
             launch(sum_motion, dim=m.node_count, inputs=[x, v, self._x_ref, self._motion], device=dev)
@@ -233,7 +238,7 @@ class CollisionPipeline:
                            1.0 / m.node_count, dt, self.margin, self._flags], device=dev)
             left = self._flags.numpy()
             if not self._cloth_searched or (left[0] and left[1]):
-                self._search_cloth(x, v, dt)
+                self._search_cloth(x, v, dt, continuing)
         if self.has_cloth:
             launch_items(detect_cloth, 0, m.node_count,
                          [x, v, m.node_thickness, m.triangle_nodes, self.cloth_candidates, self.cloth_candidate_count,
@@ -352,15 +357,21 @@ class CollisionPipeline:
                           self._triangle_ref, self._triangle_step_ref, self._searched_again, self.body_vertices,
                           self.body_vertex_count, self._vertex_distance, self._overflow], dev)
 
-    def _search_cloth(self, x: wp.array, v: wp.array, dt: float) -> None:
+    def _search_cloth(self, x: wp.array, v: wp.array, dt: float, continuing: bool) -> None:
         """Search the cloth's triangles again for every node: a node stays within margin/2 of
         where it was searched from, beyond the nodes' common motion (else a new search), and so
         does every cloth triangle's node:
-        node boxes grow by eps + margin/2 and cloth triangle boxes by margin/2."""
+        node boxes grow by eps + margin/2 and cloth triangle boxes by margin/2. In a
+        ``continuing`` Collision() each node's step is searched for as
+        :func:`~party.collision.cloth.searched_velocity` gives it."""
         m = self.model
         dev = m.device
         self.searches += 1
         half = 0.5 * self.margin
+        if continuing:
+            launch(searched_velocity, dim=m.node_count, inputs=[x, v, self._proposed, dt, half, self._searched_v],
+                   device=dev)
+            v = self._searched_v
         if self.bvh:
             self.cloth_tree.build(x, v, dt, half)
             gather, structure = gather_cloth_triangles_bvh, self.cloth_tree.id
