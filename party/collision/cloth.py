@@ -81,7 +81,7 @@ def searched_velocity(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), pr
     it) where the node's step now, from x by v dt, lies within ``margin`` [m] of the proposed
     step's segment from x, else v. The searched steps then cover the present ones, and also what
     the next step's solve proposes again for cloth that the plastic limit holds where it is:
-    searched along the held steps (some 270 nodes of GarmentCode's flare dress proposing
+    searched along the held steps (some 290 nodes of GarmentCode's flare dress proposing
     millimetres that the limit takes back), the next step's first Collision() found them beyond
     both keep tests (:func:`moved_beyond`) and searched again, at every step."""
     i = wp.tid()
