@@ -121,8 +121,8 @@ def drape_command(
               f"cloth crossings {summary['cloth_crossings']}, {summary['wall_seconds']:.0f} s")
     if summary["max_sewn_elongation"] > 1.0 + the_fabric.strain_limit + 1e-3:
         out.print(f"[yellow]tight: sewn up to {summary['max_sewn_elongation']:.2f} times rest length, beyond "
-                  f"{the_fabric.name}'s limit of {1.0 + the_fabric.strain_limit:.2f}; the pattern is smaller than "
-                  "this body there, and the cloth keeps that stretch[/]")
+                  f"{the_fabric.name}'s limit of {1.0 + the_fabric.strain_limit:.2f}, where the pattern is smaller "
+                  "than this body or its sewing had not settled; the cloth keeps that stretch[/]")
     if summary["max_seam_gap_mm"] > OPEN_SEAM_MM:
         seam, gap = max(summary["seam_gaps_mm"].items(), key=lambda item: item[1])
         out.print(f"[yellow]open seam: {seam} was still {gap:.1f} mm apart when the sewing stopped, and the garment "
