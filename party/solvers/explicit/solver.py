@@ -34,7 +34,9 @@ class SolverExplicit:
         kinetic_damping: ``(max_speed [m/s], keep [-])`` to filter v* for static relaxation
             (:mod:`party.solvers.relax`); None for dynamics. Dynamics applies the paper's f_plas
             as it is; relaxation, which seeks only the rest shape, over-relaxes its sweeps
-            (:class:`~party.solvers.step_end.StepEnd`).
+            (:class:`~party.solvers.step_end.StepEnd`), and where it holds the body's vertices
+            off the cloth (``collision.body_vertices``) enforces the limit again after contact,
+            as the implicit solver does: their push on a tight hem otherwise outran the limit.
     """
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
@@ -47,7 +49,8 @@ class SolverExplicit:
         self.kinetic_damping = kinetic_damping
         relaxing = kinetic_damping is not None
         self.end = StepEnd(model, collision, plastic_passes, max_speed=kinetic_damping[0] if relaxing else None,
-                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION if relaxing else 1.0)
+                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION if relaxing else 1.0,
+                           limit_after_contact=relaxing and collision is not None and collision.body_vertices)
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         self._f_ext = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)
