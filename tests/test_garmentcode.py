@@ -75,7 +75,7 @@ def test_sample_drapes_closed_and_clean_with_the_implicit_solver(name, tmp_path)
     summary = _drape(DATA / "patterns" / f"{name}_specification.json", tmp_path / "out", images=False,
                      solver="implicit")
     _assert_closed_and_clean(summary)
-    assert summary["body_vertices_through_cloth"] == 0  # its triangles are held off the body's vertices
+    assert summary["body_vertices_through_cloth"] == 0  # its triangles are held off the body's vertices too
     if name == "dress_pencil":
         # sewn tighter than mean_all (its waist at 1.5 times rest); before the stretched elements
         # kept their sewn length as their limit, the waist tore to 4.9 times rest and a node
