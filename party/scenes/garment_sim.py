@@ -163,9 +163,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
         with relax_progress("sewing" if round_ == 0 else "sewing on", max_iterations, progress) as on_log:
             more = sewing.relax(state, dt, max_iterations=max_iterations, min_iterations=min(400, max_iterations),
                                 on_log=on_log)
-        result.energy += [(result.iterations + it, e) for it, e in more.energy]
-        result.iterations += more.iterations
-        result.converged = more.converged
+        result.extend(more)
     if len(pairs):
         closing = _panels_model(garment, fabric, _finite(state.positions()), body, pairs,
                                 CLOSED_GAP / SEAM_REST_LENGTH - 1.0, device)
@@ -198,9 +196,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
         with relax_progress("settling seams" if round_ == 0 else "settling on", settle, progress) as on_log:
             more = settling.relax(state, relax_time_step(joined, "explicit"), max_iterations=settle,
                                   min_iterations=min(100, settle), on_log=on_log)
-        tail.energy += [(tail.iterations + it, e) for it, e in more.energy]
-        tail.iterations += more.iterations
-        tail.converged = more.converged
+        tail.extend(more)
     points, _ = untangle(_finite(state.positions()), net.triangles, device=device)
     return Sewn(garment, net, node_map, points, seam_gaps, result, tail, dt)
 

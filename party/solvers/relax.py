@@ -50,6 +50,13 @@ class RelaxResult:
     def final_energy(self) -> float:
         return self.energy[-1][1] if self.energy else float("nan")
 
+    def extend(self, more: "RelaxResult") -> None:
+        """Add relaxation ``more``, run on from where this one stopped: its iterations counted
+        on from this one's, its outcome the latest."""
+        self.energy += [(self.iterations + it, e) for it, e in more.energy]
+        self.iterations += more.iterations
+        self.converged = more.converged
+
 
 class SolverRelax:
     """Iterates a model towards static equilibrium (see the module docstring).
