@@ -12,7 +12,9 @@ the reference dress on dress form M, or GarmentCode's ``dress_sleeves_flare`` on
 its time into sewing and draping.
 
 Prints the steps' wall milliseconds per step, and per kernel its milliseconds per step,
-launches per step and share of the steps' time, largest first. Every launch that party makes
+launches per step and share of the steps' time, largest first. ``drape`` with the implicit
+solver also prints, check by check, how far the nodes moved since the last check (mean and
+99th percentile) and how many steps and nodes the crossing guard sent back meanwhile. Every launch that party makes
 through :mod:`party.launch` is timed (a CPU launch returns when its kernel has run) and the
 implicit solve replayed as a recorded graph counts as one entry; the rest of a step (host
 work between launches) is the last line. The sphere drop and the square leave out their first
@@ -182,7 +184,7 @@ def profile_drape(args: argparse.Namespace) -> None:
 
     setattr(drape_scene, phase_name, draping)
     try:
-        with clock.installed():
+        with clock.installed(), GuardLog().installed() as guard, CheckLog(drape_scene, guard).installed() as checks:
             row = run_drape(pattern, body, args.solver)
     finally:
         setattr(drape_scene, phase_name, phase)
@@ -192,6 +194,72 @@ def profile_drape(args: argparse.Namespace) -> None:
           f"{row['body_vertices_through_cloth']} body vertices through the cloth")
     print("draping steps:")
     clock.report(wall["draping"], max(row["draping_steps"], 1))
+    if checks.rows:
+        print("draping, check by check (nodes' motion since the last check; the crossing guard's reverts):")
+        print(f"{'check':>5} {'mean mm':>8} {'p99 mm':>7} {'steps reverting':>16} {'nodes reverted':>15}")
+        for k, (mean, p99) in enumerate(checks.rows):
+            steps, nodes = guard.windows[k] if k < len(guard.windows) else (0, 0)
+            print(f"{k + 1:5d} {mean:8.2f} {p99:7.2f} {steps:16d} {nodes:15d}")
+
+
+class GuardLog:
+    """The crossing guard's reverts during a drape, window by window between the drape's checks:
+    (steps with a revert, nodes reverted) in ``windows``, a window closed by :meth:`close`."""
+
+    def __init__(self) -> None:
+        self.windows: list[tuple[int, int]] = []
+        self._steps = self._nodes = 0
+
+    def close(self) -> None:
+        self.windows.append((self._steps, self._nodes))
+        self._steps = self._nodes = 0
+
+    @contextmanager
+    def installed(self) -> Iterator["GuardLog"]:
+        from party.collision.crossing_guard import CrossingGuard
+
+        original = CrossingGuard.check
+
+        def check(guard, x, v):
+            count = original(guard, x, v)
+            self._steps += int(count > 0)
+            self._nodes += count
+            return count
+
+        CrossingGuard.check = check
+        try:
+            yield self
+        finally:
+            CrossingGuard.check = original
+
+
+class CheckLog:
+    """The implicit drape's shape checks (:func:`party.scenes.drape._shape_steady`): per check,
+    the nodes' mean and 99th-percentile motion [mm] since the last, in ``rows``; each check
+    closes ``guard``'s window."""
+
+    def __init__(self, drape_scene, guard: GuardLog) -> None:
+        self.scene = drape_scene
+        self.guard = guard
+        self.rows: list[tuple[float, float]] = []
+
+    @contextmanager
+    def installed(self) -> Iterator["CheckLog"]:
+        import numpy as np
+
+        original = self.scene._shape_steady
+
+        def steady(before, after):
+            moved = 1000.0 * np.linalg.norm(after - before, axis=1)
+            self.rows.append((float(moved.mean()), float(np.percentile(moved, 99))))
+            self.guard.close()
+            return original(before, after)
+
+        self.scene._shape_steady = steady
+        try:
+            yield self
+        finally:
+            self.scene._shape_steady = original
 
 
 def main() -> None:
