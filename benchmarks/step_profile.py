@@ -12,10 +12,10 @@ the reference dress on dress form M, or GarmentCode's ``dress_sleeves_flare`` on
 its time into sewing and draping.
 
 Prints the steps' wall milliseconds per step, and per kernel its milliseconds per step,
-launches per step and share of the steps' time, largest first. ``drape`` with the implicit
-solver also prints, check by check, how far the nodes moved since the last check (mean and
-99th percentile) and how many steps and nodes the crossing guard sent back meanwhile. Every launch that party makes
-through :mod:`party.launch` is timed (a CPU launch returns when its kernel has run) and the
+launches per step and share of the steps' time, largest first; ``drape`` with the implicit
+solver also, check by check, how far the nodes moved since the last check (mean and 99th
+percentile) and on how many steps the crossing guard sent how many nodes back meanwhile.
+Every launch that party makes through :mod:`party.launch` is timed (a CPU launch returns when its kernel has run) and the
 implicit solve replayed as a recorded graph counts as one entry; the rest of a step (host
 work between launches) is the last line. The sphere drop and the square leave out their first
 steps (compilation, the first search). Timing every launch costs a few percent. For the
@@ -173,8 +173,11 @@ def profile_drape(args: argparse.Namespace) -> None:
     phase_name = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
     phase = getattr(drape_scene, phase_name)
     wall = {}
+    guard = GuardLog()
+    checks = CheckLog(drape_scene, guard)
 
     def draping(*a, **k):
+        guard.reset()  # the sewing's reverts are not the drape's
         started = time.perf_counter()
         with clock.running():
             try:
@@ -184,7 +187,7 @@ def profile_drape(args: argparse.Namespace) -> None:
 
     setattr(drape_scene, phase_name, draping)
     try:
-        with clock.installed(), GuardLog().installed() as guard, CheckLog(drape_scene, guard).installed() as checks:
+        with clock.installed(), guard.installed(), checks.installed():
             row = run_drape(pattern, body, args.solver)
     finally:
         setattr(drape_scene, phase_name, phase)
@@ -197,9 +200,8 @@ def profile_drape(args: argparse.Namespace) -> None:
     if checks.rows:
         print("draping, check by check (nodes' motion since the last check; the crossing guard's reverts):")
         print(f"{'check':>5} {'mean mm':>8} {'p99 mm':>7} {'steps reverting':>16} {'nodes reverted':>15}")
-        for k, (mean, p99) in enumerate(checks.rows):
-            steps, nodes = guard.windows[k] if k < len(guard.windows) else (0, 0)
-            print(f"{k + 1:5d} {mean:8.2f} {p99:7.2f} {steps:16d} {nodes:15d}")
+        for k, ((mean, p99), (steps, nodes)) in enumerate(zip(checks.rows, guard.windows), start=1):
+            print(f"{k:5d} {mean:8.2f} {p99:7.2f} {steps:16d} {nodes:15d}")
 
 
 class GuardLog:
@@ -207,6 +209,9 @@ class GuardLog:
     (steps with a revert, nodes reverted) in ``windows``, a window closed by :meth:`close`."""
 
     def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
         self.windows: list[tuple[int, int]] = []
         self._steps = self._nodes = 0
 
