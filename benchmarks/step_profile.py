@@ -15,14 +15,15 @@ Prints the steps' wall milliseconds per step, and per kernel its milliseconds pe
 launches per step and share of the steps' time, largest first; ``drape`` with the implicit
 solver also, check by check, how far the nodes moved since the last check (mean and 99th
 percentile) and on how many steps the crossing guard sent how many nodes back meanwhile.
-Every launch that party makes through :mod:`party.launch` is timed (a CPU launch returns when its kernel has run) and the
-implicit solve replayed as a recorded graph counts as one entry; the rest of a step (host
-work between launches) is the last line. The sphere drop and the square leave out their first
-steps (compilation, the first search). Timing every launch costs a few percent. For the
-implicit solver it also prints how often its worker threads gave their core away while waiting
-for each other (``SolverImplicit.worker_yields``): at 64 x 64 some 160 times a step alone, some
-1,500 beside one busy process, whose core the sweeps then share. Run it as a script (it imports
-``scaling.py`` and ``compare.py`` from beside it), on an otherwise idle machine.
+Every launch that party makes through :mod:`party.launch` is timed (a CPU launch returns when
+its kernel has run) and the implicit solve replayed as a recorded graph counts as one entry;
+the rest of a step (host work between launches) is the last line. The sphere drop and the
+square leave out their first steps (compilation, the first search). Timing every launch costs
+a few percent. For the implicit solver it also prints how often its worker threads gave their
+core away while waiting for each other (``SolverImplicit.worker_yields``): at 64 x 64 some 160
+times a step alone, some 1,500 beside one busy process, whose core the sweeps then share. Run
+it as a script (it imports ``scaling.py`` and ``compare.py`` from beside it), on an otherwise
+idle machine.
 """
 
 from __future__ import annotations

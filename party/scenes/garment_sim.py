@@ -187,6 +187,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     state = joined.state()
     settle = max(max_iterations // 4, 200)
     settling = SolverRelax(joined, collision=replace(SEWING_COLLISION, cloth=True), max_speed=1.0)
+    settling_dt = relax_time_step(joined, "explicit")
     tail = RelaxResult()
     overstretched = []
     for round_ in range(SETTLING_ROUNDS):
@@ -194,8 +195,8 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
         if round_ and (tail.converged or overstretched[-1] == 0 or overstretched[-1] >= overstretched[-2]):
             break
         with relax_progress("settling seams" if round_ == 0 else "settling on", settle, progress) as on_log:
-            more = settling.relax(state, relax_time_step(joined, "explicit"), max_iterations=settle,
-                                  min_iterations=min(100, settle), on_log=on_log)
+            more = settling.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),
+                                  on_log=on_log)
         tail.extend(more)
     points, _ = untangle(_finite(state.positions()), net.triangles, device=device)
     return Sewn(garment, net, node_map, points, seam_gaps, result, tail, dt)
