@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import subprocess
 import sys
 import tempfile
@@ -136,7 +137,7 @@ def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, tim
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "result.npz"
         command = [str(python), str(script)] + (["--"] if system == "blender" else [])
-        command += [str(grid), "1" if self_collision else "0", str(out), str(seconds)]
+        command += [str(grid), "1" if self_collision else "0", str(out), str(seconds), sphere_fabric_json()]
         started = time.perf_counter()
         try:
             done = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
@@ -149,6 +150,14 @@ def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, tim
         total = time.perf_counter() - started
         return {"startup_seconds": float(total - data["wall_seconds"]), "wall_per_simulated_second":
                 float(data["wall_seconds"] / data["simulated_seconds"]), **outcome(data["points"], data["triangles"])}
+
+
+def sphere_fabric_json() -> str:
+    """The sphere drop's fabric as the peers take it: ``Fabric.to_dict()`` in JSON, SI units."""
+    from party.fabric import fabric_by_name
+    from party.scenes.sphere_drop import FABRIC
+
+    return json.dumps(fabric_by_name(FABRIC).to_dict())
 
 
 def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, dt: float | None,

@@ -21,9 +21,10 @@ from .scene import Scene, check_timing
 SPHERE_RADIUS = 0.3   # m
 CLOTH_SIZE = 1.0      # m
 DROP_HEIGHT = 0.62    # m, the cloth's plane above the sphere's centre
+FABRIC = "cotton"     # the library fabric the scene drops (the peers are given it too)
 
 
-def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implicit", fabric: Fabric | str = "cotton",
+def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implicit", fabric: Fabric | str = FABRIC,
           duration: float = 1.0, dt: float | None = None, device: str | None = None, quick: bool = False) -> Scene:
     """The sphere-drop scene with ``grid`` x ``grid`` nodes; ``dt`` defaults to the solver's."""
     check_solver(solver)
