@@ -9,8 +9,8 @@ for 1 s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for 
 system in the scene's fabric (the peers are handed it, :func:`sphere_fabric_json`, and set their
 own models from it). Each peer runs in its own virtual environment under ``benchmarks/.venvs/``,
 made here if missing (bpy 5.0.1 needs Python 3.11; newton 1.8.0). Printed per scene and system:
-wall seconds per simulated second with start-up (imports, set-up, the first frame's kernel compilation) excluded and reported apart,
-the ratio to party's implicit solver, and the outcome checked the same way for all (smallest
+wall seconds per simulated second with start-up (imports, set-up, the first frame's kernel
+compilation) excluded and reported apart, the ratio to party's implicit solver, and the outcome checked the same way for all (smallest
 distance of a node from the sphere's centre, nodes inside the sphere, cloth crossings: mesh edges
 through a triangle of the final mesh, a peer's quads split in two; final height range, and how far
 the final shape lies from party implicit's: the mean and the largest distance from a node of either
