@@ -4,25 +4,25 @@
                                  [--systems party-implicit party-implicit-150hz party-explicit blender newton]
                                  [--seconds 1] [--repeats 1] [--garments/--no-garments] [--out benchmarks/results]
 
-Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius 0.3 m
-for 1 s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for the peers), every
-system in the scene's fabric (the peers are handed it, :func:`sphere_fabric_json`, and set their
-own models from it). Each peer runs in its own virtual environment under ``benchmarks/.venvs/``,
-made here if missing (bpy 5.0.1 needs Python 3.11; newton 1.8.0). Printed per scene and system:
-wall seconds per simulated second with start-up (imports, set-up, the first frame's kernel
-compilation) excluded and reported apart, the ratio to party's implicit solver, and the outcome checked the same way for all (smallest
-distance of a node from the sphere's centre, nodes inside the sphere, cloth crossings: mesh edges
-through a triangle of the final mesh, a peer's quads split in two; final height range, and how far
-the final shape lies from party implicit's: the mean and the largest distance from a node of either
-to the nearest point of the other's surface, the largest being the symmetric Hausdorff distance
-between the nodes and the surfaces; a node's nearest node would count the net's sampling as a
-difference, up to half a spacing between two nets on one surface; and the stretch along the
-grid, the largest and the share of row or column neighbours beyond 5 %). The outcome is
-equal where no node is inside the sphere, no edge crosses the cloth (with self-collision on) and
-the shapes lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's
-implicit solver at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where
-party's own is 1/300 s). Last lines per scene give party implicit's speed-up over each peer,
-and Blender's time over ``party-implicit-150hz``, step for step.
+Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius 0.3 m for 1
+s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for the peers), every system
+in the scene's fabric (the peers are handed it, :func:`sphere_fabric_json`, and set their own models
+from it). Each peer runs in its own virtual environment under ``benchmarks/.venvs/``, made here if
+missing (bpy 5.0.1 needs Python 3.11; newton 1.8.0). Printed per scene and system: wall seconds per
+simulated second with start-up (imports, set-up, the first frame's kernel compilation) excluded and
+reported apart, the ratio to party's implicit solver, and the outcome checked the same way for all
+(smallest distance of a node from the sphere's centre, nodes inside the sphere, cloth crossings:
+mesh edges through a triangle of the final mesh, a peer's quads split in two; final height range,
+and how far the final shape lies from party implicit's: the mean and the largest distance from a
+node of either to the nearest point of the other's surface, the largest being the symmetric
+Hausdorff distance between the nodes and the surfaces; a node's nearest node would count the net's
+sampling as a difference, up to half a spacing between two nets on one surface; and the stretch
+along the grid, the largest and the share of row or column neighbours beyond 5 %). The outcome is
+equal where no node is inside the sphere, no edge crosses the cloth (with self-collision on) and the
+shapes lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's implicit
+solver at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where party's own is
+1/300 s). Last lines per scene give party implicit's speed-up over each peer, and Blender's time
+over ``party-implicit-150hz``, step for step.
 
 Scenes (b) and (c), party only: the reference dress (``party/data/patterns``) on the default
 dress form and GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj`` (from
