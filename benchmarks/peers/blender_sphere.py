@@ -59,8 +59,11 @@ def blender_material(fabric: dict, spacing: float, vertices: int, area: float) -
       against a cantilever: Blender's strips of these masses twisted and did not settle.)
     - dampers: party damps each neighbour pair by damping * h^2 [kg/s] (its viscous term);
       Blender's springs damp along themselves by their damping [kg/unit].
-    - ``air_damping`` 0 (party's scene has no air), friction of the sphere mu * 100 (Blender's
-      friction cuts the tangential velocity by 0.01 friction times the normal one)."""
+    - ``air_damping`` 0: party's scene has no air.
+    - ``time_scale``: a frame of a 30 fps scene is 1/30 s (:data:`TIME_UNIT`).
+
+    The sphere's friction, set on its collision settings, is mu * 100: Blender's friction cuts
+    the tangential velocity by 0.01 friction times the normal one."""
     u2 = TIME_UNIT ** 2
     damper = fabric["damping"] * spacing ** 2 * TIME_UNIT
     tensile = 0.5 * (fabric["tensile_warp"] + fabric["tensile_weft"])

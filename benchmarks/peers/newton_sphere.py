@@ -20,10 +20,12 @@ import newton  # noqa: E402
 import warp as wp  # noqa: E402
 
 
-def newton_material(fabric: dict, spacing: float) -> dict:
-    """Newton's cloth parameters for party's ``fabric`` on a grid of ``spacing`` [m].
+def newton_material(fabric: dict, spacing: float, particles: int, area: float) -> dict:
+    """Newton's cloth parameters for party's ``fabric`` on a grid of ``spacing`` [m] with
+    ``particles`` over ``area`` [m^2].
 
-    - ``mass`` per particle: the areal density times a cell.
+    - ``mass`` per particle: the areal density spread evenly (Newton's grid gives every particle
+      the same mass).
     - ``tri_ke``, ``tri_ka``: the Lame parameters (mu, lambda) [N/m] of Newton's stable
       neo-Hookean membrane, isotropic. party's net has its tensile stiffness E along warp and
       weft (their mean here), Poisson's ratio about 0 and a separate, weaker shear modulus; an
@@ -41,7 +43,7 @@ def newton_material(fabric: dict, spacing: float) -> dict:
     tensile = 0.5 * (fabric["tensile_warp"] + fabric["tensile_weft"])
     viscous = fabric["damping"] * spacing ** 2
     between = 2.0 * spacing / 3.0
-    return {"mass": fabric["areal_density"] * spacing ** 2, "tri_ke": 0.5 * tensile, "tri_ka": 0.0,
+    return {"mass": fabric["areal_density"] * area / particles, "tri_ke": 0.5 * tensile, "tri_ka": 0.0,
             "tri_kd": 0.25 * viscous, "edge_ke": fabric["bending_rigidity"] / between,
             "edge_kd": viscous * between ** 2 / spacing, "mu": fabric["friction"]}
 
@@ -52,7 +54,7 @@ seconds, fabric = float(sys.argv[4]), json.loads(sys.argv[5])
 fps, substeps, iterations = 60, 10, 10
 builder = newton.ModelBuilder(up_axis=newton.Axis.Z)
 cell = 1.0 / (n - 1)
-material = newton_material(fabric, cell)
+material = newton_material(fabric, cell, n * n, 1.0)
 builder.add_cloth_grid(pos=wp.vec3(-0.5, -0.5, 0.62), rot=wp.quat_identity(), vel=wp.vec3(0.0), dim_x=n - 1,
                        dim_y=n - 1, cell_x=cell, cell_y=cell, mass=material["mass"], tri_ke=material["tri_ke"],
                        tri_ka=material["tri_ka"], tri_kd=material["tri_kd"], edge_ke=material["edge_ke"],
