@@ -48,8 +48,9 @@ def blender_material(fabric: dict, spacing: float, vertices: int, area: float) -
       same mass).
     - ``tension``: Blender's structural spring is tension / spacing; party's warp or weft
       element is tensile * width / length, the tensile stiffness itself on a square grid (their
-      mean). A strip of 11 x 41 vertices hanging from its top row stretched 25.67 mm in Blender,
-      what the discrete chain gives to four digits. ``compression``: the same, which Blender's
+      mean). A strip of 11 x 41 vertices 25 mm apart, of a tenth of cotton's tensile stiffness
+      and no shear, hanging from its top row stretched 25.67 mm in Blender, what the discrete
+      chain gives to four digits. ``compression``: the same, which Blender's
       angular model spends on Choi and Ko's buckling response instead of a linear spring.
     - ``shear``: both diagonals of each quad, shear / spacing each: a net of diagonals of
       stiffness k has shear modulus k.
