@@ -30,6 +30,9 @@ COLLISION_QUALITY = 4
 """Blender's collision passes per step: the fewest that hold the cloth on the sphere at this
 distance (with its default, 2, and with 3 the cloth fell through)."""
 
+FPS = 30
+"""The scene's frames per second."""
+
 TIME_UNIT = math.sqrt(1.0e-3)
 """Blender's cloth time unit [s]: its solver scales gravity by 0.001 (``cloth_calc_force``), so
 gravity is true where one unit is sqrt(0.001) s. A frame advances ``time_scale`` units; with
@@ -61,7 +64,7 @@ def blender_material(fabric: dict, spacing: float, vertices: int, area: float) -
     - dampers: party damps each neighbour pair by damping * h^2 [kg/s] (its viscous term);
       Blender's springs damp along themselves by their damping [kg/unit].
     - ``air_damping`` 0: party's scene has no air.
-    - ``time_scale``: a frame of a 30 fps scene is 1/30 s (:data:`TIME_UNIT`).
+    - ``time_scale``: a frame is 1 / :data:`FPS` s (:data:`TIME_UNIT`).
 
     The sphere's friction, set on its collision settings, is mu * 100: Blender's friction cuts
     the tangential velocity by 0.01 friction times the normal one."""
@@ -73,16 +76,16 @@ def blender_material(fabric: dict, spacing: float, vertices: int, area: float) -
             "shear_stiffness": fabric["shear"] * u2 * spacing,
             "bending_stiffness": 10.0 * fabric["bending_rigidity"] * u2 / spacing ** 2,
             "tension_damping": damper, "compression_damping": damper, "shear_damping": damper,
-            "bending_damping": damper, "time_scale": 1.0 / (30.0 * TIME_UNIT)}
+            "bending_damping": damper, "time_scale": 1.0 / (FPS * TIME_UNIT)}
 
 
 args = sys.argv[sys.argv.index("--") + 1:]
 n, self_collision, out = int(args[0]), args[1] == "1", args[2]
 seconds, fabric = float(args[3]), json.loads(args[4])
-last = 1 + round(30 * seconds)
+last = 1 + round(FPS * seconds)
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
-scene.frame_start, scene.frame_end, scene.render.fps = 1, last, 30
+scene.frame_start, scene.frame_end, scene.render.fps = 1, last, FPS
 bpy.ops.mesh.primitive_grid_add(x_subdivisions=n - 1, y_subdivisions=n - 1, size=1.0, location=(0, 0, 0.62))
 cloth = bpy.context.active_object
 bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=0.3, location=(0, 0, 0))
@@ -109,4 +112,4 @@ points = np.array([(evaluated.matrix_world @ v.co)[:] for v in evaluated.data.ve
 quads = np.array([tuple(p.vertices) for p in evaluated.data.polygons])
 triangles = np.r_[quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]
 np.savez(out, points=points, triangles=triangles, setup_seconds=setup, wall_seconds=wall,
-         simulated_seconds=(last - 1) / 30)
+         simulated_seconds=(last - 1) / FPS)
