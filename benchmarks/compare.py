@@ -2,7 +2,8 @@
 
     python benchmarks/compare.py [--grids 64 100] [--self-collision off on]
                                  [--systems party-implicit party-implicit-150hz party-explicit blender newton]
-                                 [--seconds 1] [--repeats 1] [--garments/--no-garments] [--out benchmarks/results]
+                                 [--seconds 1] [--repeats 1] [--garments/--no-garments] [--flare-spacing-mm 20 9]
+                                 [--out benchmarks/results]
 
 Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius 0.3 m for 1
 s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for the peers), every system
@@ -27,7 +28,9 @@ over ``party-implicit-150hz``, step for step.
 Scenes (b) and (c), party only: the reference dress (``party/data/patterns``) on the default
 dress form and GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj`` (from
 ``../shared/data/garmentcode``, skipped when absent) sewn and draped to rest, wall seconds
-in all, against GarmentCode's own 1,086 s for the flare dress.
+in all, against GarmentCode's own 1,086 s for the flare dress. GarmentCode's mesh of it has
+22,336 vertices; party's net at its default 20 mm spacing a fifth as many nodes (4,526), so the
+flare dress is also draped at 9 mm, where the net has as many (22,449): the like-for-like figure.
 
 With ``--repeats N`` every run is made N times, the systems taking turns within each round so
 that a change in the machine's load falls on all of them alike; the times reported are the
@@ -58,6 +61,13 @@ PEERS = {"blender": (HERE / "peers" / "blender_sphere.py", ["bpy==5.0.1", "numpy
 SHARED = HERE.parent.parent / "shared" / "data" / "garmentcode"
 GARMENTCODE_SECONDS = 1086.0
 """GarmentCode's own simulator on dress_sleeves_flare on this machine's kind (its README)."""
+GARMENTCODE_VERTICES = 22336
+"""The vertices of GarmentCode's mesh of dress_sleeves_flare in that run (its README)."""
+FLARE_SPACINGS_MM = (20.0, 9.0)
+"""The node spacings [mm] the flare dress is draped at: party's default, and the spacing at which
+party's net has as many nodes as GarmentCode's mesh has vertices (22,449 against 22,336)."""
+GARMENT_SPACING_MM = 20.0
+"""The reference dress's node spacing [mm] (party's default)."""
 SPHERE_RADIUS = 0.3
 SYSTEMS = ["party-implicit", "party-implicit-150hz", "party-explicit", "blender", "newton"]
 PARTY_DT = {"party-implicit": None, "party-implicit-150hz": 1.0 / 150.0, "party-explicit": None}
@@ -77,6 +87,8 @@ def main() -> None:
                         help="simulated seconds of the sphere drop (at 1 s the cloth still slides)")
     parser.add_argument("--repeats", type=int, default=1, help="runs of each system and scene; medians are reported")
     parser.add_argument("--garments", action=argparse.BooleanOptionalAction, default=True)
+    parser.add_argument("--flare-spacing-mm", type=float, nargs="+", default=list(FLARE_SPACINGS_MM),
+                        help="node spacings [mm] of GarmentCode's flare dress (9: as many nodes as its own mesh)")
     parser.add_argument("--peer-timeout", type=float, default=1200.0, help="seconds before a peer run is stopped")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args()
@@ -84,6 +96,8 @@ def main() -> None:
         parser.error(f"--seconds must be at least 0.1, got {args.seconds}")
     if args.repeats < 1:
         parser.error(f"--repeats must be at least 1, got {args.repeats}")
+    if not all(spacing > 0.0 for spacing in args.flare_spacing_mm):
+        parser.error(f"--flare-spacing-mm must be positive, got {args.flare_spacing_mm}")
     args.out.mkdir(parents=True, exist_ok=True)
 
     rows = []
@@ -95,10 +109,10 @@ def main() -> None:
                 scene, args.systems, args.repeats, "wall_per_simulated_second",
                 lambda system: run_sphere(system, grid, on, args.seconds, args.peer_timeout))]
     if args.garments:
-        for label, pattern, body in garment_scenes():
+        for label, pattern, body, spacing in garment_scenes(args.flare_spacing_mm):
             drapers = [s for s in args.systems if s in ("party-implicit", "party-explicit")]
             rows += in_turns(label, drapers, args.repeats, "wall_seconds_to_rest",
-                             lambda system: run_drape(pattern, body, system.split("-")[1]))
+                             lambda system: run_drape(pattern, body, system.split("-")[1], spacing))
     report(rows, args.out)
 
 
@@ -227,23 +241,29 @@ def shape_distance(result: dict, reference: dict) -> tuple[float, float]:
     return float(both.mean()), float(both.max())
 
 
-def garment_scenes():
+def garment_scenes(flare_spacings_mm=FLARE_SPACINGS_MM):
+    """Scenes (b) and (c): (label, pattern, body, node spacing [m]) for the reference dress and for
+    GarmentCode's flare dress at each of ``flare_spacings_mm`` (skipped where ../shared lacks it)."""
     from party.scenes.dress import pattern_path
 
-    yield "reference dress on dress form M", pattern_path(), "M"
+    yield f"reference dress on dress form M, {GARMENT_SPACING_MM:g} mm", pattern_path(), "M", GARMENT_SPACING_MM / 1000
     flare = SHARED / "patterns" / "dress_sleeves_flare_specification.json"
-    if flare.exists():
-        yield "GarmentCode dress_sleeves_flare on mean_all", flare, str(SHARED / "bodies" / "mean_all.obj")
-    else:
+    if not flare.exists():
         print(f"(skipping the GarmentCode scene: {flare} not found)")
+        return
+    for spacing in flare_spacings_mm:
+        yield (f"GarmentCode dress_sleeves_flare on mean_all, {spacing:g} mm", flare,
+               str(SHARED / "bodies" / "mean_all.obj"), spacing / 1000)
 
 
-def run_drape(pattern: Path, body: str, solver: str) -> dict:
+def run_drape(pattern: Path, body: str, solver: str, spacing: float) -> dict:
+    """``party drape`` of ``pattern`` on ``body`` in wool flannel at ``spacing`` [m] with ``solver``:
+    the outcome and the wall seconds in all (sewing, draping and output)."""
     from party.fabric import wool_flannel
     from party.scenes.drape import drape
 
     with tempfile.TemporaryDirectory() as tmp:
-        summary = drape(pattern, body, wool_flannel(), Path(tmp) / "drape", spacing=0.02, images=False,
+        summary = drape(pattern, body, wool_flannel(), Path(tmp) / "drape", spacing=spacing, images=False,
                         progress=False, solver=solver, device="cpu")
     return {"wall_seconds_to_rest": summary["wall_seconds"], "at_rest": summary["relaxation"]["at_rest"],
             "nodes": summary["nodes"], "draping_steps": summary["relaxation"]["draping_steps"],
@@ -285,7 +305,7 @@ def describe(row: dict) -> str:
                 f"seam gap {row['max_seam_gap_mm']:.1f} mm, "
                 f"penetrations {row['body_penetrations']} (body vertices through {row['body_vertices_through_cloth']}), "
                 f"crossings {row['cloth_crossings']}, elongation {row['max_elongation']:.3f}, "
-                f"{row['ratio_to_garmentcode']:.1f}x GarmentCode's 1,086 s")
+                f"{row['ratio_to_garmentcode']:.1f}x GarmentCode's 1,086 s for {GARMENTCODE_VERTICES:,} vertices")
     return (f"{seconds_text(row, 'wall_per_simulated_second')} s per simulated s "
             f"(start-up {row['startup_seconds']:.1f} s), "
             f"min r {row['min_distance_from_centre_m']:.4f} m, inside {row['nodes_inside']}, "

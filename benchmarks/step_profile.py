@@ -4,12 +4,13 @@
                                              [--dt S] [--solver implicit|explicit]
     python benchmarks/step_profile.py square [--nodes 100000] [--steps 10] [--self-collision on|off]
     python benchmarks/step_profile.py drape [--garment reference|flare] [--solver implicit|explicit]
+                                       [--spacing-mm 20]
 
 ``sphere-drop`` is ``party run sphere-drop`` without output; ``square`` is the cloth of
 ``benchmarks/scaling.py`` (a 1 m square resting on the sphere) at one size; ``drape`` drapes
 the reference dress on dress form M, or GarmentCode's ``dress_sleeves_flare`` on ``mean_all.obj``
-(from ``../shared/``), in wool flannel at 20 mm, as ``benchmarks/compare.py`` does, and splits
-its time into sewing and draping.
+(from ``../shared/``), in wool flannel at 20 mm (or ``--spacing-mm``), as ``benchmarks/compare.py``
+does, and splits its time into sewing and draping.
 
 Prints the steps' wall milliseconds per step, and per kernel its milliseconds per step,
 launches per step and share of the steps' time, largest first; ``drape`` with the implicit
@@ -165,11 +166,12 @@ def profile_drape(args: argparse.Namespace) -> None:
     import party.scenes.drape as drape_scene
     from compare import garment_scenes, run_drape
 
-    scenes = {label.split()[0].lower(): (label, pattern, body) for label, pattern, body in garment_scenes()}
+    scenes = {label.split()[0].lower(): (label, pattern, body, spacing)
+              for label, pattern, body, spacing in garment_scenes([args.spacing_mm])}
     key = "garmentcode" if args.garment == "flare" else "reference"
     if key not in scenes:
         raise SystemExit("GarmentCode's flare dress is not in ../shared/data/garmentcode/")
-    label, pattern, body = scenes[key]
+    label, pattern, body, spacing = scenes[key]
     clock = KernelClock()
     phase_name = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
     phase = getattr(drape_scene, phase_name)
@@ -189,7 +191,7 @@ def profile_drape(args: argparse.Namespace) -> None:
     setattr(drape_scene, phase_name, draping)
     try:
         with clock.installed(), guard.installed(), checks.installed():
-            row = run_drape(pattern, body, args.solver)
+            row = run_drape(pattern, body, args.solver, spacing)
     finally:
         setattr(drape_scene, phase_name, phase)
     print(f"{label}, {row['nodes']} nodes, {args.solver} solver: {row['wall_seconds_to_rest']:.1f} s in all, "
@@ -284,9 +286,10 @@ def main() -> None:
     drape = workloads.add_parser("drape", help="a garment draped to rest, as benchmarks/compare.py does")
     drape.add_argument("--garment", choices=("reference", "flare"), default="reference")
     drape.add_argument("--solver", choices=("implicit", "explicit"), default="implicit")
+    drape.add_argument("--spacing-mm", type=float, default=20.0, help="the net's node spacing [mm]")
     args = parser.parse_args()
-    if getattr(args, "steps", 1) < 1 or getattr(args, "seconds", 1.0) <= 0:
-        parser.error("--steps and --seconds must be positive")
+    if getattr(args, "steps", 1) < 1 or getattr(args, "seconds", 1.0) <= 0 or getattr(args, "spacing_mm", 1.0) <= 0:
+        parser.error("--steps, --seconds and --spacing-mm must be positive")
     {"sphere-drop": profile_sphere_drop, "square": profile_square, "drape": profile_drape}[args.workload](args)
 
 
