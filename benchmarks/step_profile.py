@@ -171,7 +171,8 @@ def profile_drape(args: argparse.Namespace) -> None:
     key = "garmentcode" if args.garment == "flare" else "reference"
     if key not in scenes:
         raise SystemExit("GarmentCode's flare dress is not in ../shared/data/garmentcode/")
-    label, pattern, body, spacing = scenes[key]
+    label, pattern, body, _ = scenes[key]
+    label, spacing = f"{label.rsplit(', ', 1)[0]}, {args.spacing_mm:g} mm", args.spacing_mm / 1000
     clock = KernelClock()
     phase_name = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
     phase = getattr(drape_scene, phase_name)
