@@ -166,13 +166,13 @@ def profile_drape(args: argparse.Namespace) -> None:
     import party.scenes.drape as drape_scene
     from compare import garment_scenes, run_drape
 
-    scenes = {label.split()[0].lower(): (label, pattern, body, spacing)
-              for label, pattern, body, spacing in garment_scenes([args.spacing_mm])}
+    scenes = {label.split()[0].lower(): (label.rsplit(", ", 1)[0], pattern, body)
+              for label, pattern, body, _ in garment_scenes()}
     key = "garmentcode" if args.garment == "flare" else "reference"
     if key not in scenes:
         raise SystemExit("GarmentCode's flare dress is not in ../shared/data/garmentcode/")
-    label, pattern, body, _ = scenes[key]
-    label, spacing = f"{label.rsplit(', ', 1)[0]}, {args.spacing_mm:g} mm", args.spacing_mm / 1000
+    name, pattern, body = scenes[key]
+    label, spacing = f"{name}, {args.spacing_mm:g} mm", args.spacing_mm / 1000
     clock = KernelClock()
     phase_name = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
     phase = getattr(drape_scene, phase_name)
