@@ -64,11 +64,11 @@ GARMENTCODE_SECONDS = 1086.0
 """GarmentCode's own simulator on dress_sleeves_flare on this machine's kind (its README)."""
 GARMENTCODE_VERTICES = 22336
 """The vertices of GarmentCode's mesh of dress_sleeves_flare in that run (its README)."""
-FLARE_SPACINGS_MM = (20.0, 9.0)
+GARMENT_SPACING_MM = 20.0
+"""The reference dress's node spacing [mm] (``party drape``'s default)."""
+FLARE_SPACINGS_MM = (GARMENT_SPACING_MM, 9.0)
 """The node spacings [mm] the flare dress is draped at: party's default, and the spacing at which
 party's net has as many nodes as GarmentCode's mesh has vertices (22,449 against 22,336)."""
-GARMENT_SPACING_MM = 20.0
-"""The reference dress's node spacing [mm] (party's default)."""
 SPHERE_RADIUS = 0.3
 SYSTEMS = ["party-implicit", "party-implicit-150hz", "party-explicit", "blender", "newton"]
 PARTY_DT = {"party-implicit": None, "party-implicit-150hz": 1.0 / 150.0, "party-explicit": None}

@@ -272,6 +272,8 @@ class CheckLog:
 
 
 def main() -> None:
+    from compare import GARMENT_SPACING_MM
+
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     workloads = parser.add_subparsers(dest="workload", required=True)
     drop = workloads.add_parser("sphere-drop", help="party run sphere-drop's steps")
@@ -287,7 +289,7 @@ def main() -> None:
     drape = workloads.add_parser("drape", help="a garment draped to rest, as benchmarks/compare.py does")
     drape.add_argument("--garment", choices=("reference", "flare"), default="reference")
     drape.add_argument("--solver", choices=("implicit", "explicit"), default="implicit")
-    drape.add_argument("--spacing-mm", type=float, default=20.0, help="the net's node spacing [mm]")
+    drape.add_argument("--spacing-mm", type=float, default=GARMENT_SPACING_MM, help="the net's node spacing [mm]")
     args = parser.parse_args()
     if getattr(args, "steps", 1) < 1 or getattr(args, "seconds", 1.0) <= 0 or getattr(args, "spacing_mm", 1.0) <= 0:
         parser.error("--steps, --seconds and --spacing-mm must be positive")
