@@ -1,5 +1,13 @@
+import os
+
 import numpy as np
 import pytest
+
+if os.environ.get("PYTEST_XDIST_WORKER") and "PARTY_THREADS" not in os.environ:
+    # pytest-xdist runs a test process per core: each keeps to its share of the cores, since
+    # the implicit solver's workers spin at barriers (docs/design.md, Kernels and CPU threads)
+    _cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    os.environ["PARTY_THREADS"] = str(max(1, _cores // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
 
 from party import device
 
