@@ -101,6 +101,8 @@ def drape_command(
     device: Optional[str] = typer.Option(None, "--device", help="cpu, cuda or auto."),
     images: bool = typer.Option(True, "--images/--no-images", help="Render front, side and back views."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show progress bars."),
+    resume: bool = typer.Option(False, "--resume",
+                                help="Go on from OUT/checkpoint.npz (the sewn garment, then the draping)."),
 ) -> None:
     """Sew a pattern onto a body and drape it under gravity."""
     from .fabric import fabric_by_name
@@ -114,7 +116,7 @@ def drape_command(
     summary = drape(pattern, body, the_fabric, out_dir, spacing=spacing_mm / 1000.0, device=device,
                     solver=check_solver(solver),
                     pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,
-                    progress=progress)
+                    progress=progress, resume=resume)
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
               f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']} "
               f"(body vertices through the cloth {summary['body_vertices_through_cloth']}), "

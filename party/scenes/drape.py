@@ -21,7 +21,10 @@ GarmentCode's flare dress). Output layout::
                                        or its sewing had not settled),
                                        relaxation (sewing iterations, draping steps and
                                        simulated seconds, at_rest, final energy [J]),
-                                       wall_seconds
+                                       wall_seconds (resumed drapes: all runs')
+    OUT/checkpoint.npz                 while it runs: the sewn garment, then the draping state,
+                                       which ``resume`` goes on from (:mod:`.drape_checkpoint`);
+                                       gone once the drape finishes
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import shutil
 import tempfile
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -43,10 +47,11 @@ from ..output.frames import write_json, write_mesh
 from ..output.garment_export import write_garment
 from ..output.metrics import body_vertices_through, cloth_crossings, max_elongation
 from ..pattern import load_pattern
-from ..model import Model
-from ..solvers.relax import SolverRelax, total_energy
+from ..model import Model, State
+from ..solvers.relax import RelaxResult, SolverRelax, total_energy
 from ..solvers.select import guard_every
 from ..solvers.settle import DRAPE_SWEEPS, Settled, settle
+from .drape_checkpoint import DrapeCheckpoint, restore_draping
 from .garment_sim import garment_model, relax_progress, relax_time_step, sew
 
 EXPLICIT_ITERATIONS = 6000
@@ -84,18 +89,42 @@ is written anyway, with ``at_rest`` false in its summary."""
 def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float = 0.02, device: str | None = None,
           pattern_units: str | None = None, body_units: str | None = None, up: str | None = None,
           seams_file: Path | None = None, sew_iterations: int = 6000, images: bool = True, progress: bool = True,
-          solver: str = "explicit") -> dict:
+          solver: str = "explicit", resume: bool = False) -> dict:
     """Drape ``pattern`` on ``body`` in ``fabric``; write results to ``out`` (see module docs).
     Results are assembled in a temporary folder beside ``out`` and moved in at the end, so a
-    failed run leaves no half-written output."""
+    failed run leaves no half-written output, only ``out/checkpoint.npz``, which a run with
+    ``resume`` goes on from (the sewing not repeated; see :mod:`.drape_checkpoint`)."""
     started = time.perf_counter()
     the_pattern = load_pattern(pattern, seams_file=seams_file, units=pattern_units)
     the_body = load_body(body, units=body_units, up=up)
     garment = assemble(the_pattern, spacing)
+    body_file = Path(body)
+    inputs = {"pattern": str(Path(pattern).resolve()), "body": str(body_file.resolve()) if body_file.exists() else body,
+              "fabric": fabric.to_dict(), "spacing_m": spacing, "solver": solver, "sew_iterations": sew_iterations,
+              "pattern_units": pattern_units, "body_units": body_units, "up": up,
+              "seams_file": None if seams_file is None else str(Path(seams_file).resolve())}
+    checkpoint = DrapeCheckpoint(Path(out) / "checkpoint.npz", inputs)
+    saved = checkpoint.load() if resume else None
+    earlier = float(saved["wall_seconds"]) if saved else 0.0
 
-    sewn = sew(garment, the_body, fabric, device=device, max_iterations=sew_iterations, progress=progress)
+    def wall() -> float:
+        return earlier + time.perf_counter() - started
+
+    if saved:
+        sewn = checkpoint.sewn(garment, saved)
+    else:
+        sewn = sew(garment, the_body, fabric, device=device, max_iterations=sew_iterations, progress=progress)
+        checkpoint.path.parent.mkdir(parents=True, exist_ok=True)
+        checkpoint.save_sewn(sewn, wall())
     model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)
-    draped, energy = (_drape_to_rest if solver == "implicit" else _relax_kinetically)(model, progress)
+    state = model.state()
+    first_step, energy = restore_draping(state, saved)
+
+    def on_check(step: int, energy: list, state) -> None:
+        checkpoint.save_draping(state, step, energy, wall())
+
+    draped, energy = (_drape_to_rest if solver == "implicit" else _relax_kinetically)(
+        model, state, first_step, energy, on_check, progress)
     points = draped.state.positions()
     if not np.all(np.isfinite(points)):
         raise SimulationUnstable("draping blew up (non-finite positions); try a coarser --spacing")
@@ -135,7 +164,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
                                                  "draping_energy_J": energy})
         if images:
             _pictures(staging / "images", points, model.triangles, garment, the_body, sewn.relaxation.energy, energy)
-        summary["wall_seconds"] = round(time.perf_counter() - started, 2)
+        summary["wall_seconds"] = round(wall(), 2)
         write_json(staging / "summary.json", summary)
         if out.exists():
             shutil.rmtree(out)
@@ -146,24 +175,32 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
     return summary
 
 
-def _drape_to_rest(model: Model, progress: bool) -> tuple[Settled, list[tuple[int, float]]]:
+Saver = Callable[[int, list, State], None]
+"""``on_save(step, energy log [(step, J)], state)``: a drape's checkpoint, called at each check."""
+
+
+def _drape_to_rest(model: Model, state: State, first_step: int, energy: list[tuple[int, float]], on_save: Saver,
+                   progress: bool) -> tuple[Settled, list[tuple[int, float]]]:
     """Implicit steps: the sewn garment let fall under gravity until its shape is steady (see
     :data:`STEADY_MEAN`), with the implicit solver's collisions (the crossing guard and body
-    vertices on: :func:`~party.solvers.select.large_step_collision`); returns the outcome and the
-    energy [J] logged at each check against the step."""
-    energy: list[tuple[int, float]] = []
+    vertices on: :func:`~party.solvers.select.large_step_collision`), from ``state`` after
+    ``first_step`` steps that logged ``energy``; ``on_save(step, energy, state)`` at every
+    check; returns the outcome and the energy [J] logged at each check against the step."""
+    energy = list(energy)
     with relax_progress("draping", int(DRAPE_SECONDS / DRAPE_CHECK), progress) as on_log:
         def on_check(step: int, state) -> None:
             energy.append((step, total_energy(model, state.positions())))
             on_log(len(energy), energy[-1][1], state)
+            on_save(step, energy, state)
 
         settled = settle(model, "implicit", memory=DRAPE_MEMORY, check_every=DRAPE_CHECK, max_seconds=DRAPE_SECONDS,
                          rest_speed=0.0, steady=_shape_steady, on_check=on_check, max_speed=DRAPE_MAX_SPEED,
-                         iterations=DRAPE_SWEEPS)
+                         iterations=DRAPE_SWEEPS, state=state, first_step=first_step)
     return settled, energy
 
 
-def _relax_kinetically(model: Model, progress: bool) -> tuple[Settled, list[tuple[int, float]]]:
+def _relax_kinetically(model: Model, state: State, first_step: int, energy: list[tuple[int, float]], on_save: Saver,
+                       progress: bool) -> tuple[Settled, list[tuple[int, float]]]:
     """Explicit steps: the relaxation of :mod:`party.solvers.relax` (section 7's iteration, with
     kinetic damping) until the energy settles (to 0.2 % over 300 iterations) or
     :data:`EXPLICIT_ITERATIONS`, the crossing guard checking every 1/300 s of its steps, as in
@@ -173,13 +210,21 @@ def _relax_kinetically(model: Model, progress: bool) -> tuple[Settled, list[tupl
     samples at 30 mm had 14 to 551 of them through the cloth without, 0 to 2 with), the plastic
     limit enforced again after that (without, the body vertices' push on the jumpsuit's tight
     hems at 20 mm stretched them to 5.5 times rest, against a limit of 1.4); returns the
-    outcome (``at_rest``: the energy settled) and the energy log [J] against the iteration."""
-    state = model.state()
+    outcome (``at_rest``: the energy settled) and the energy log [J] against the iteration;
+    ``state``, ``first_step``, ``energy`` and ``on_save`` as for :func:`_drape_to_rest`, at every log."""
     dt = relax_time_step(model, "explicit")
     with relax_progress("draping", EXPLICIT_ITERATIONS, progress) as on_log:
+        logged = list(energy)
+
+        def on_log_and_save(iteration: int, energy_now: float, state) -> None:
+            on_log(iteration, energy_now, state)
+            logged.append((iteration, energy_now))
+            on_save(iteration, logged, state)
+
         guarded = CollisionSettings(crossing_guard=True, guard_every=guard_every(dt), body_vertices=True)
         relaxed = SolverRelax(model, collision=guarded, max_speed=1.0, momentum=0.9, solver="explicit").relax(
-            state, dt, max_iterations=EXPLICIT_ITERATIONS, min_iterations=300, on_log=on_log)
+            state, dt, max_iterations=EXPLICIT_ITERATIONS, min_iterations=300, on_log=on_log_and_save,
+            resumed=RelaxResult(first_step, list(energy)))
     return Settled(state, relaxed.iterations, relaxed.iterations * dt, relaxed.converged), relaxed.energy
 
 

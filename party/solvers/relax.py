@@ -88,15 +88,18 @@ class SolverRelax:
             scratch.node_qd.zero_()
 
     def relax(self, state: State, dt: float, *, max_iterations: int = 20000, min_iterations: int = 200,
-              log_every: int = 50, tolerance: float = 2e-3, window: int = 6, on_log=None) -> RelaxResult:
+              log_every: int = 50, tolerance: float = 2e-3, window: int = 6, on_log=None,
+              resumed: RelaxResult | None = None) -> RelaxResult:
         """Iterate ``state`` in place until the energy changes by less than ``tolerance`` (relative)
         over ``window`` logs, or ``max_iterations``. ``on_log(iteration, energy, state)`` is called
-        at each log (for progress bars and partial output)."""
+        at each log (for progress bars and partial output). ``resumed``: the log of this
+        relaxation until it stopped, ``state`` holding where it was; it goes on from there."""
         control = self.model.control()
         scratch = self.model.state()
-        result = RelaxResult()
+        result = RelaxResult(resumed.iterations, list(resumed.energy)) if resumed else RelaxResult()
         current = state
-        for it in range(1, max_iterations + 1):
+        it = result.iterations
+        for it in range(result.iterations + 1, max_iterations + 1):
             self.iterate(current, scratch, control, dt)
             current, scratch = scratch, current
             if it % log_every == 0 or it == max_iterations:

@@ -73,7 +73,7 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = C
            max_seconds: float | None = None, state: State | None = None,
            steady: Callable[[np.ndarray, np.ndarray], bool] | None = None,
            on_check: Callable[[int, State], None] | None = None, dt: float | None = None,
-           max_speed: float = math.inf, iterations: int | None = None) -> Settled:
+           max_speed: float = math.inf, iterations: int | None = None, first_step: int = 0) -> Settled:
     """Bring ``model`` to static equilibrium from ``state`` (default: its set-up state).
     Raises :class:`SimulationUnstable` on blow-up; returns with ``at_rest`` False when
     ``max_seconds`` of simulated time pass first (default :data:`MAX_SECONDS`: the implicit
@@ -93,7 +93,9 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = C
     or the shape, has stopped changing, though single nodes may go on creeping or jittering.
     ``on_check(step, state)`` is called at every check (progress, logs). The step ``dt`` [s]
     is :func:`dynamics_time_step`'s unless given; ``iterations``, the implicit solver's sweeps
-    per step, its default unless given."""
+    per step, its default unless given. ``first_step`` > 0 resumes a settling that stopped
+    after that many steps, ``state`` then holding where it was (the solver's own memory starts
+    afresh); the time limit counts them."""
     dt = dt or dynamics_time_step(model, solver)
     stepper = make_solver(solver, model, collision=collision, iterations=iterations)
     keep = math.exp(-dt / memory)
@@ -107,7 +109,7 @@ def settle(model: Model, solver: str, *, collision: CollisionSettings | None = C
     if solver == "implicit":
         rest_speed *= 0.2  # its last millimetres creep in slowly: ask for a slower creep
     steps = int(max_seconds / dt)
-    for it in range(1, steps + 1):
+    for it in range(first_step + 1, steps + 1):
         stepper.step(state, scratch, control, dt)
         state, scratch = scratch, state
         launch(_drag, dim=model.node_count, inputs=[state.node_qd, keep, float(max_speed)], device=model.device)

@@ -1,0 +1,105 @@
+"""Resuming ``party drape``: what a drape has done so far, kept in ``OUT/checkpoint.npz``.
+
+A drape saves its checkpoint once the garment is sewn, and while it drapes at most every
+:data:`SAVE_SECONDS` of wall time (atomically: :func:`~party.output.frames.save_checkpoint`).
+``party drape ... --resume`` reads it and goes on from there: the sewing is not repeated, and
+the draping continues from the saved positions [m] and velocities [m/s], step count and energy
+log. The solver's own memory (the implicit solver's Chebyshev history and body planes, the
+crossing guard's last checked positions) starts afresh, so a resumed drape takes another path
+from there than one run through: it comes to rest as one does, not to the same bits. A drape
+that finishes replaces OUT, its checkpoint with it; a checkpoint of a drape asked for with
+other inputs is refused with a one-line error.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidInput
+from ..garment.assemble import Garment
+from ..model import State
+from ..output.frames import load_checkpoint, save_checkpoint
+from ..solvers.relax import RelaxResult
+from .garment_sim import Sewn
+
+SAVE_SECONDS = 10.0
+"""Least wall time [s] between two saves while draping."""
+
+
+class DrapeCheckpoint:
+    """The checkpoint at ``path`` of the drape asked for with ``inputs`` (a JSON-able dict:
+    pattern, body, fabric, spacing, solver, ...), which a resumed drape must match."""
+
+    def __init__(self, path: Path, inputs: dict) -> None:
+        self.path = Path(path)
+        self.inputs = json.dumps(inputs, sort_keys=True)
+        self._sewn: dict = {}
+        self._saved_at = -math.inf
+
+    def load(self) -> dict | None:
+        """The saved arrays, or None where there is no checkpoint; raises :class:`InvalidInput`
+        naming the inputs that differ where it belongs to another drape."""
+        if not self.path.exists():
+            return None
+        try:
+            saved = load_checkpoint(self.path)
+            theirs = json.loads(str(saved["inputs"]))
+        except (OSError, ValueError, KeyError) as error:
+            raise InvalidInput(f"{self.path} is not a drape checkpoint ({error}); remove it or drop --resume") from None
+        ours = json.loads(self.inputs)
+        differing = sorted(k for k in ours.keys() | theirs.keys() if ours.get(k) != theirs.get(k))
+        if differing:
+            raise InvalidInput(f"{self.path} belongs to another drape (different {', '.join(differing)}); "
+                               "remove it or drop --resume")
+        self._sewn = {k: saved[k] for k in saved if k.startswith("sewn_") or k == "wall_seconds"}
+        return saved
+
+    def sewn(self, garment: Garment, saved: dict) -> Sewn:
+        """The sewn garment of ``saved`` (:meth:`load`) on ``garment``, the same pattern meshed again."""
+        net, node_map = garment.sewn()
+        points = saved["sewn_points"].astype(np.float64)
+        if points.shape != (net.node_count, 3):
+            raise InvalidInput(f"{self.path} holds {len(points)} sewn nodes where this pattern has {net.node_count}; "
+                               "remove it or drop --resume")
+        relaxation = RelaxResult(int(saved["sewn_iterations"]), [tuple(row) for row in saved["sewn_energy"].tolist()])
+        return Sewn(garment, net, node_map, points, saved["sewn_seam_gaps"], relaxation,
+                    RelaxResult(int(saved["sewn_settling_iterations"])), float(saved["sewn_dt"]))
+
+    def save_sewn(self, sewn: Sewn, wall_seconds: float) -> None:
+        """Save the garment as sewn, after ``wall_seconds`` [s] of the drape."""
+        self._sewn = {
+            "sewn_points": sewn.points.astype(np.float64), "sewn_seam_gaps": np.asarray(sewn.seam_gaps, np.float64),
+            "sewn_energy": np.asarray(sewn.relaxation.energy, np.float64).reshape(-1, 2),
+            "sewn_iterations": sewn.relaxation.iterations, "sewn_settling_iterations": sewn.settling.iterations,
+            "sewn_dt": sewn.dt, "wall_seconds": wall_seconds,
+        }
+        save_checkpoint(self.path, inputs=self.inputs, **self._sewn)
+        self._saved_at = time.perf_counter()
+
+    def save_draping(self, state: State, step: int, energy: list, wall_seconds: float) -> None:
+        """Save the draping ``state`` after ``step`` steps (iterations) with its ``energy`` log
+        [(step, J)], ``wall_seconds`` [s] into the drape; at most every :data:`SAVE_SECONDS`."""
+        now = time.perf_counter()
+        if now - self._saved_at < SAVE_SECONDS:
+            return
+        save_checkpoint(self.path, inputs=self.inputs, **{**self._sewn, "wall_seconds": wall_seconds},
+                        node_q=state.positions(), node_qd=state.velocities(), draping_step=step,
+                        draping_energy=np.asarray(energy, np.float64).reshape(-1, 2))
+        self._saved_at = now
+
+
+def restore_draping(state: State, saved: dict | None) -> tuple[int, list]:
+    """Put the saved draping positions and velocities into ``state``; the steps taken and the
+    energy log [(step, J)] (0 and [] where the drape had not begun)."""
+    if saved is None or "node_q" not in saved:
+        return 0, []
+    if saved["node_q"].shape != (state.node_q.shape[0], 3):
+        raise InvalidInput("the checkpoint's draping state does not fit this garment; remove it or drop --resume")
+    state.node_q.assign(saved["node_q"].astype(np.float32))
+    state.node_qd.assign(saved["node_qd"].astype(np.float32))
+    return int(saved["draping_step"]), [(int(s), float(e)) for s, e in saved["draping_energy"].tolist()]
