@@ -120,11 +120,11 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
     state = model.state()
     first_step, energy = restore_draping(state, saved)
 
-    def on_check(step: int, energy: list, state) -> None:
-        checkpoint.save_draping(state, step, energy, wall())
+    def save(step: int, log: list, state: State) -> None:
+        checkpoint.save_draping(state, step, log, wall())
 
     draped, energy = (_drape_to_rest if solver == "implicit" else _relax_kinetically)(
-        model, state, first_step, energy, on_check, progress)
+        model, state, first_step, energy, save, progress)
     points = draped.state.positions()
     if not np.all(np.isfinite(points)):
         raise SimulationUnstable("draping blew up (non-finite positions); try a coarser --spacing")
