@@ -3,7 +3,7 @@
     python benchmarks/compare.py [--grids 64 100] [--self-collision off on]
                                  [--systems party-implicit party-implicit-150hz party-explicit blender newton]
                                  [--seconds 1] [--repeats 1] [--garments/--no-garments] [--flare-spacing-mm 20 9]
-                                 [--out benchmarks/results]
+                                 [--out benchmarks/results] [--resume]
 
 Scene (a), sphere drop: a 1 m cloth of N x N nodes falls 0.32 m onto a sphere of radius 0.3 m for 1
 s, or ``--seconds`` (``party run sphere-drop``; ``benchmarks/peers/`` for the peers), every system
@@ -38,7 +38,9 @@ medians, with the fastest and slowest run (this 2-core machine's runs of one set
 up to a fifth either way), and the outcome is the first run's.
 
 party runs on the CPU, as the peers do, also where a GPU is present (``benchmarks/gpu.py``
-measures the GPU). Writes ``OUT/compare.csv`` and ``OUT/compare.png`` (a bar chart).
+measures the GPU). Writes ``OUT/compare.csv`` and ``OUT/compare.png`` (a bar chart), and each
+run's results as it finishes (``OUT/runs.jsonl``, :mod:`run_log`): ``--resume`` goes on from
+there, running only what the log does not hold.
 """
 
 from __future__ import annotations
@@ -92,6 +94,7 @@ def main() -> None:
                         help="node spacings [mm] of GarmentCode's flare dress (9: as many nodes as its own mesh)")
     parser.add_argument("--peer-timeout", type=float, default=1200.0, help="seconds before a peer run is stopped")
     parser.add_argument("--out", type=Path, default=HERE / "results")
+    parser.add_argument("--resume", action="store_true", help="take the runs OUT/runs.jsonl holds, run the rest")
     args = parser.parse_args()
     if not args.seconds >= 0.1:
         parser.error(f"--seconds must be at least 0.1, got {args.seconds}")
@@ -100,7 +103,9 @@ def main() -> None:
     if not all(spacing > 0.0 for spacing in args.flare_spacing_mm):
         parser.error(f"--flare-spacing-mm must be positive, got {args.flare_spacing_mm}")
     args.out.mkdir(parents=True, exist_ok=True)
+    from run_log import RunLog
 
+    log = RunLog(args.out, args.resume)
     rows = []
     for grid in args.grids:
         for self_collision in args.self_collision:
@@ -108,24 +113,31 @@ def main() -> None:
             on = self_collision == "on"
             rows += [{**row, "self_collision": on} for row in in_turns(
                 scene, args.systems, args.repeats, "wall_per_simulated_second",
-                lambda system: run_sphere(system, grid, on, args.seconds, args.peer_timeout))]
+                lambda system: run_sphere(system, grid, on, args.seconds, args.peer_timeout), log,
+                {"seconds": args.seconds})]
     if args.garments:
         for label, pattern, body, spacing in garment_scenes(args.flare_spacing_mm):
             drapers = [s for s in args.systems if s in ("party-implicit", "party-explicit")]
             rows += in_turns(label, drapers, args.repeats, "wall_seconds_to_rest",
-                             lambda system: run_drape(pattern, body, system.split("-")[1], spacing))
+                             lambda system: run_drape(pattern, body, system.split("-")[1], spacing), log, {})
     report(rows, args.out)
 
 
-def in_turns(scene: str, systems: list[str], repeats: int, key: str, run) -> list[dict]:
-    """``run(system)`` for each of ``systems`` in turn, ``repeats`` rounds, printing each result;
-    one row per system for ``scene``, its time ``key`` the median (:func:`median_run`)."""
+def in_turns(scene: str, systems: list[str], repeats: int, key: str, run, log, settings: dict) -> list[dict]:
+    """``run(system)`` for each of ``systems`` in turn, ``repeats`` rounds, printing each result
+    and keeping it in ``log`` (:class:`run_log.RunLog`, under ``settings``), or taking it from
+    there; one row per system for ``scene``, its time ``key`` the median (:func:`median_run`)."""
     runs = {system: [] for system in systems}
     for round_ in range(repeats):
         for system in systems:
             turn = f" (run {round_ + 1} of {repeats})" if repeats > 1 else ""
-            print(f"{scene}: {system}{turn} ...", flush=True)
-            runs[system].append(run(system))
+            kept = log.get(scene, system, round_, settings)
+            print(f"{scene}: {system}{turn}{' (kept from an earlier run)' if kept else ''} ...", flush=True)
+            if kept is None:
+                kept = run(system)
+                if "error" not in kept:  # a failed run is run again when resumed
+                    log.put(scene, system, round_, settings, kept)
+            runs[system].append(kept)
             print(f"    {describe(runs[system][-1])}", flush=True)
     return [{"scene": scene, "system": system, **median_run(results, key)} for system, results in runs.items()]
 
