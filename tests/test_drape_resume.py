@@ -10,9 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from party.body.load import load_body
 from party.fabric import fabric_by_name
+from party.garment.assemble import assemble
+from party.pattern import load_pattern
 from party.scenes import drape as drape_module
-from party.scenes import drape_checkpoint
+from party.scenes import drape_checkpoint, garment_sim
 
 DRESS = Path(drape_module.__file__).parents[1] / "data" / "patterns" / "dress_sleeves.json"
 SPACING = 0.03
@@ -62,6 +65,52 @@ def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_pa
     logged = json.loads((out / "relaxation.json").read_text())["draping_energy_J"]
     assert [step for step, _ in logged] == sorted({step for step, _ in logged})  # one log, on from the saved one
     assert logged[0][0] <= saves[0]
+
+
+def test_a_drape_stopped_while_sewing_goes_on_from_the_last_stage_it_finished(tmp_path, monkeypatch):
+    """Stopped after the closing stage of its sewing, a drape resumed does not place the panels
+    again (the first stage's start), settles, drapes and writes a clean result."""
+    out = tmp_path / "out"
+    save = drape_checkpoint.DrapeCheckpoint.save_sewing
+
+    def save_then_stop(self, stage, wall_seconds):
+        save(self, stage, wall_seconds)
+        if stage.stage == "closed":
+            raise Stop
+
+    monkeypatch.setattr(drape_checkpoint.DrapeCheckpoint, "save_sewing", save_then_stop)
+    flannel = fabric_by_name("wool_flannel")
+    with pytest.raises(Stop):
+        drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver="implicit", images=False, progress=False)
+    with np.load(out / "checkpoint.npz") as saved:
+        assert str(saved["sewing_stage"]) == "closed" and "sewn_points" not in saved
+
+    monkeypatch.setattr(drape_checkpoint.DrapeCheckpoint, "save_sewing", save)
+    monkeypatch.setattr(garment_sim, "dress", lambda *args, **kwargs: pytest.fail("placed the panels again"))
+    summary = drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver="implicit", images=False,
+                                 progress=False, resume=True)
+    assert summary["relaxation"]["at_rest"] and summary["max_seam_gap_mm"] < 1.0
+    assert summary["body_penetrations"] == 0 and summary["cloth_crossings"] == 0
+
+
+def test_a_sewing_resumed_after_its_first_stage_or_closing_ends_as_one_run_through():
+    """Each stage starts from where the last left the cloth, at rest, with models and solvers of
+    its own: a sewing resumed after its first stage, its closing or its last settling round ends
+    on the same positions, bit for bit, with the same seam gaps and logs. (Resumed after an
+    earlier settling round, the settling's collision searches start afresh, which may change
+    the last bits.)"""
+    garment = assemble(load_pattern(DRESS), SPACING)
+    body, flannel = load_body("M"), fabric_by_name("wool_flannel")
+    stages = []
+    whole = garment_sim.sew(garment, body, flannel, on_stage=stages.append)
+    assert [(s.stage, s.rounds) for s in stages][:2] == [("sewn", 0), ("closed", 0)]
+    assert [s.rounds for s in stages[2:]] == list(range(1, len(stages) - 1)) and stages[2].stage == "settling"
+    for stage in stages[:2] + stages[-1:]:
+        again = garment_sim.sew(garment, body, flannel, resume=stage)
+        assert np.array_equal(again.points, whole.points), stage.stage
+        assert np.array_equal(again.seam_gaps, whole.seam_gaps)
+        assert again.relaxation.energy == whole.relaxation.energy and again.settling.energy == whole.settling.energy
+        assert again.settling.iterations == whole.settling.iterations
 
 
 def test_resuming_from_another_drapes_checkpoint_is_refused_in_one_line(tmp_path):

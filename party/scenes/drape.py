@@ -22,7 +22,8 @@ GarmentCode's flare dress). Output layout::
                                        relaxation (sewing iterations, draping steps and
                                        simulated seconds, at_rest, final energy [J]),
                                        wall_seconds (resumed drapes: all runs')
-    OUT/checkpoint.npz                 while it runs: the sewn garment, then the draping state,
+    OUT/checkpoint.npz                 while it runs: the sewing after each of its stages,
+                                       the sewn garment, then the draping state,
                                        which ``resume`` goes on from (:mod:`.drape_checkpoint`);
                                        gone once the drape finishes
 """
@@ -93,7 +94,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
     """Drape ``pattern`` on ``body`` in ``fabric``; write results to ``out`` (see module docs).
     Results are assembled in a temporary folder beside ``out`` and moved in at the end, so a
     failed run leaves no half-written output, only ``out/checkpoint.npz``, which a run with
-    ``resume`` goes on from (the sewing not repeated; see :mod:`.drape_checkpoint`)."""
+    ``resume`` goes on from (the stages done not repeated; see :mod:`.drape_checkpoint`)."""
     started = time.perf_counter()
     the_pattern = load_pattern(pattern, seams_file=seams_file, units=pattern_units)
     the_body = load_body(body, units=body_units, up=up)
@@ -110,11 +111,11 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
     def wall() -> float:
         return earlier + time.perf_counter() - started
 
-    if saved:
+    if saved and "sewn_points" in saved:
         sewn = checkpoint.sewn(garment, saved)
     else:
-        sewn = sew(garment, the_body, fabric, device=device, max_iterations=sew_iterations, progress=progress)
-        checkpoint.path.parent.mkdir(parents=True, exist_ok=True)
+        sewn = sew(garment, the_body, fabric, device=device, max_iterations=sew_iterations, progress=progress,
+                   resume=checkpoint.sewing_stage(saved), on_stage=lambda stage: checkpoint.save_sewing(stage, wall()))
         checkpoint.save_sewn(sewn, wall())
     model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)
     state = model.state()

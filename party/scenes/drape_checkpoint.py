@@ -1,12 +1,16 @@
 """Resuming ``party drape``: what a drape has done so far, kept in ``OUT/checkpoint.npz``.
 
-A drape saves its checkpoint once the garment is sewn, and while it drapes at most every
-:data:`SAVE_SECONDS` of wall time (atomically: :func:`~party.output.frames.save_checkpoint`).
-``party drape ... --resume`` reads it and goes on from there: the sewing is not repeated, and
-the draping continues from the saved positions [m] and velocities [m/s], step count and energy
-log. The solver's own memory (the implicit solver's Chebyshev history and body planes, the
-crossing guard's last checked positions) starts afresh, so a resumed drape takes another path
-from there than one run through: it comes to rest as one does, not to the same bits. A drape
+A drape saves its checkpoint after each stage of the sewing (:class:`~.garment_sim.SewingStage`:
+the first stage, the closing, each round of the settling), once the garment is sewn, and while
+it drapes at most every :data:`SAVE_SECONDS` of wall time (atomically:
+:func:`~party.output.frames.save_checkpoint`). ``party drape ... --resume`` reads it and goes on
+from there: the sewing from the stage it had finished, the draping from the saved positions [m]
+and velocities [m/s], step count and energy log. A sewing stage starts from the positions the
+last left, at rest, so a sewing goes on as it would have (bit for bit but after a settling
+round, whose collision memory starts afresh). The draping solver's own memory (the implicit
+solver's Chebyshev history and body planes, the crossing guard's last checked positions) starts
+afresh, so a drape resumed while draping takes another path from there than one run through:
+it comes to rest as one does, not to the same bits. A drape
 that finishes replaces OUT, its checkpoint with it; a checkpoint of a drape asked for with
 other inputs is refused with a one-line error.
 """
@@ -25,7 +29,7 @@ from ..garment.assemble import Garment
 from ..model import State
 from ..output.frames import load_checkpoint, save_checkpoint
 from ..solvers.relax import RelaxResult
-from .garment_sim import Sewn
+from .garment_sim import Sewn, SewingStage
 
 SAVE_SECONDS = 10.0
 """Least wall time [s] between two saves while draping."""
@@ -59,6 +63,25 @@ class DrapeCheckpoint:
         self._sewn = {k: saved[k] for k in saved if k.startswith("sewn_") or k == "wall_seconds"}
         return saved
 
+    @staticmethod
+    def sewing_stage(saved: dict | None) -> SewingStage | None:
+        """The sewing stage ``saved`` (:meth:`load`) had finished, where it had not finished the
+        sewing (None where it had, or where there is none)."""
+        if saved is None or "sewing_stage" not in saved or "sewn_points" in saved:
+            return None
+        return SewingStage(
+            str(saved["sewing_stage"]), saved["sewing_points"].astype(np.float64), float(saved["sewing_dt"]),
+            _log(saved, "sewing"), _log(saved, "settling"), [int(n) for n in saved["overstretched"]],
+            int(saved["rounds"]), saved["seam_gaps"] if saved["seam_gaps"].size else None)
+
+    def save_sewing(self, stage: SewingStage, wall_seconds: float) -> None:
+        """Save the sewing as it stood after ``stage``, ``wall_seconds`` [s] into the drape."""
+        self._write(sewing_stage=stage.stage, sewing_points=stage.points.astype(np.float64), sewing_dt=stage.dt,
+                    **_log_arrays(stage.relaxation, "sewing"), **_log_arrays(stage.settling, "settling"),
+                    overstretched=np.asarray(stage.overstretched, np.int64), rounds=stage.rounds,
+                    seam_gaps=np.asarray([] if stage.seam_gaps is None else stage.seam_gaps, np.float64),
+                    wall_seconds=wall_seconds)
+
     def sewn(self, garment: Garment, saved: dict) -> Sewn:
         """The sewn garment of ``saved`` (:meth:`load`) on ``garment``, the same pattern meshed again."""
         net, node_map = garment.sewn()
@@ -78,19 +101,31 @@ class DrapeCheckpoint:
             "sewn_iterations": sewn.relaxation.iterations, "sewn_settling_iterations": sewn.settling.iterations,
             "sewn_dt": sewn.dt, "wall_seconds": wall_seconds,
         }
-        save_checkpoint(self.path, inputs=self.inputs, **self._sewn)
-        self._saved_at = time.perf_counter()
+        self._write(**self._sewn)
 
     def save_draping(self, state: State, step: int, energy: list, wall_seconds: float) -> None:
         """Save the draping ``state`` after ``step`` steps (iterations) with its ``energy`` log
         [(step, J)], ``wall_seconds`` [s] into the drape; at most every :data:`SAVE_SECONDS`."""
-        now = time.perf_counter()
-        if now - self._saved_at < SAVE_SECONDS:
+        if time.perf_counter() - self._saved_at < SAVE_SECONDS:
             return
-        save_checkpoint(self.path, inputs=self.inputs, **{**self._sewn, "wall_seconds": wall_seconds},
-                        node_q=state.positions(), node_qd=state.velocities(), draping_step=step,
-                        draping_energy=np.asarray(energy, np.float64).reshape(-1, 2))
-        self._saved_at = now
+        self._write(**{**self._sewn, "wall_seconds": wall_seconds}, node_q=state.positions(),
+                    node_qd=state.velocities(), draping_step=step,
+                    draping_energy=np.asarray(energy, np.float64).reshape(-1, 2))
+
+    def _write(self, **arrays) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        save_checkpoint(self.path, inputs=self.inputs, **arrays)
+        self._saved_at = time.perf_counter()
+
+
+def _log_arrays(log: RelaxResult, name: str) -> dict:
+    return {f"{name}_energy": np.asarray(log.energy, np.float64).reshape(-1, 2), f"{name}_iterations": log.iterations,
+            f"{name}_converged": log.converged}
+
+
+def _log(saved: dict, name: str) -> RelaxResult:
+    return RelaxResult(int(saved[f"{name}_iterations"]), [(int(i), float(e)) for i, e in saved[f"{name}_energy"]],
+                       bool(saved[f"{name}_converged"]))
 
 
 def restore_draping(state: State, saved: dict | None) -> tuple[int, list]:

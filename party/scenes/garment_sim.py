@@ -21,7 +21,8 @@ run dress`` count the crossings of every result they write.
 from __future__ import annotations
 
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from typing import Callable
 
 import numpy as np
 
@@ -131,8 +132,28 @@ def garment_model(net: ClothNet, fabric: Fabric, points: np.ndarray, body: Body,
     return builder.finalize(device)
 
 
+@dataclass
+class SewingStage:
+    """Where a sewing stood after one of its stages (:func:`sew`), to go on from: ``stage``
+    "sewn" (the first stage's rounds), "closed" (the closing) or "settling" (``rounds`` of the
+    settling done), the node positions [m] then (the panels' nodes for the first two, the joined
+    garment's for the last), the relaxation's step ``dt`` [s], the logs so far (``relaxation``:
+    the first two stages; ``settling``), the elements beyond :data:`OVERSTRETCHED` before each
+    settling round, and the seam gaps [m] at the join."""
+
+    stage: str
+    points: np.ndarray
+    dt: float
+    relaxation: RelaxResult
+    settling: RelaxResult = field(default_factory=RelaxResult)
+    overstretched: list[int] = field(default_factory=list)
+    rounds: int = 0
+    seam_gaps: np.ndarray | None = None
+
+
 def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = None, max_iterations: int = 6000,
-        progress: bool = False) -> Sewn:
+        progress: bool = False, resume: SewingStage | None = None,
+        on_stage: Callable[[SewingStage], None] | None = None) -> Sewn:
     """Place ``garment`` around ``body``, sew it closed and return the sewn garment.
 
     Three relaxations, all with the paper's explicit steps:
@@ -148,25 +169,35 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
        limit and cloth-cloth collision on, so that the dynamics start from a net within its
        limits; for more rounds while it pulls back what the first stage overstretched
        (:data:`SETTLING_ROUNDS`).
+
+    ``on_stage(stage)`` is called after the first stage, the closing and each settling round
+    (:class:`SewingStage`), and a sewing given one as ``resume`` goes on after it. Each stage
+    and round starts from the positions the last one left, at rest, so a resumed sewing goes on
+    as it would have, but for the memory of the settling's collision searches and crossing guard.
     """
-    start = dress(garment, body, device=device or "cpu")
     net, node_map = garment.sewn()
     pairs = sewing_pairs(node_map)
-    model = _panels_model(garment, fabric, start, body, pairs, np.inf, device)
-    dt = relax_time_step(model, "explicit")
-    state = model.state()
-    sewing = SolverRelax(model, collision=SEWING_COLLISION, max_speed=4.0, momentum=MOMENTUM)
-    result = RelaxResult()
-    for round_ in range(SEWING_ROUNDS):
-        if round_ and (result.converged or _pair_gaps(state.positions(), pairs).max(initial=0.0) <= OPEN_GAP):
-            break
-        with relax_progress("sewing" if round_ == 0 else "sewing on", max_iterations, progress) as on_log:
-            more = sewing.relax(state, dt, max_iterations=max_iterations, min_iterations=min(400, max_iterations),
-                                on_log=on_log)
-        result.extend(more)
-    if len(pairs):
-        closing = _panels_model(garment, fabric, _finite(state.positions()), body, pairs,
-                                CLOSED_GAP / SEAM_REST_LENGTH - 1.0, device)
+    stage = resume.stage if resume else None
+    result = _copy(resume.relaxation) if resume else RelaxResult()
+    if stage is None:
+        model = _panels_model(garment, fabric, dress(garment, body, device=device or "cpu"), body, pairs, np.inf,
+                              device)
+        dt = relax_time_step(model, "explicit")
+        state = model.state()
+        sewing = SolverRelax(model, collision=SEWING_COLLISION, max_speed=4.0, momentum=MOMENTUM)
+        for round_ in range(SEWING_ROUNDS):
+            if round_ and (result.converged or _pair_gaps(state.positions(), pairs).max(initial=0.0) <= OPEN_GAP):
+                break
+            with relax_progress("sewing" if round_ == 0 else "sewing on", max_iterations, progress) as on_log:
+                more = sewing.relax(state, dt, max_iterations=max_iterations, min_iterations=min(400, max_iterations),
+                                    on_log=on_log)
+            result.extend(more)
+        points = _finite(state.positions())
+        stage = _reached(on_stage, SewingStage("sewn", points, dt, result))
+    else:
+        points, dt = resume.points, resume.dt
+    if stage == "sewn" and len(pairs):
+        closing = _panels_model(garment, fabric, points, body, pairs, CLOSED_GAP / SEAM_REST_LENGTH - 1.0, device)
         state = closing.state()
         steps = max(max_iterations // 4, 200)
         with relax_progress("closing seams", steps, progress) as on_log:
@@ -174,23 +205,28 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
             closed = SolverRelax(closing, collision=SEWING_COLLISION, max_speed=1.0).relax(
                 state, dt, max_iterations=steps, min_iterations=min(100, steps), on_log=on_log)
         result.iterations += closed.iterations
-    points = _finite(state.positions())
-    pair_gap = _pair_gaps(points, garment.seam_pairs)
-    seam_gaps = np.zeros(len(garment.pattern.seams))
-    np.maximum.at(seam_gaps, garment.seam_of_pair, pair_gap)
-    merged = np.zeros((net.node_count, 3))
-    np.add.at(merged, node_map, points)
-    merged /= np.bincount(node_map, minlength=net.node_count)[:, None]
-    merged, _ = untangle(merged, net.triangles, device=device)
+        points = _finite(state.positions())
+        stage = _reached(on_stage, SewingStage("closed", points, dt, result))
+    if stage == "settling":
+        seam_gaps, merged = resume.seam_gaps, points
+    else:
+        pair_gap = _pair_gaps(points, garment.seam_pairs)
+        seam_gaps = np.zeros(len(garment.pattern.seams))
+        np.maximum.at(seam_gaps, garment.seam_of_pair, pair_gap)
+        merged = np.zeros((net.node_count, 3))
+        np.add.at(merged, node_map, points)
+        merged /= np.bincount(node_map, minlength=net.node_count)[:, None]
+        merged, _ = untangle(merged, net.triangles, device=device)
 
     joined = garment_model(net, fabric.with_(friction=0.0), merged, body, gravity=False, device=device, sewn=False)
     state = joined.state()
     settle = max(max_iterations // 4, 200)
     settling = SolverRelax(joined, collision=replace(SEWING_COLLISION, cloth=True), max_speed=1.0)
     settling_dt = relax_time_step(joined, "explicit")
-    tail = RelaxResult()
-    overstretched = []
-    for round_ in range(SETTLING_ROUNDS):
+    resumed = stage == "settling"
+    tail = _copy(resume.settling) if resumed else RelaxResult()
+    overstretched = list(resume.overstretched) if resumed else []
+    for round_ in range(resume.rounds if resumed else 0, SETTLING_ROUNDS):
         overstretched.append(_overstretched(joined, state.positions()))
         if round_ and (tail.converged or overstretched[-1] == 0 or overstretched[-1] >= overstretched[-2]):
             break
@@ -198,8 +234,21 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
             more = settling.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),
                                   on_log=on_log)
         tail.extend(more)
+        _reached(on_stage, SewingStage("settling", _finite(state.positions()), dt, result, tail, list(overstretched),
+                                       round_ + 1, seam_gaps))
     points, _ = untangle(_finite(state.positions()), net.triangles, device=device)
     return Sewn(garment, net, node_map, points, seam_gaps, result, tail, dt)
+
+
+def _reached(on_stage: Callable[[SewingStage], None] | None, stage: SewingStage) -> str:
+    """Report ``stage`` to ``on_stage``, its logs as they are now; its name."""
+    if on_stage is not None:
+        on_stage(replace(stage, relaxation=_copy(stage.relaxation), settling=_copy(stage.settling)))
+    return stage.stage
+
+
+def _copy(log: RelaxResult) -> RelaxResult:
+    return RelaxResult(log.iterations, list(log.energy), log.converged)
 
 
 def _panels_model(garment: Garment, fabric: Fabric, points: np.ndarray, body: Body, pairs: np.ndarray,
