@@ -89,16 +89,14 @@ class DrapeCheckpoint:
         if points.shape != (net.node_count, 3):
             raise InvalidInput(f"{self.path} holds {len(points)} sewn nodes where this pattern has {net.node_count}; "
                                "remove it or drop --resume")
-        relaxation = RelaxResult(int(saved["sewn_iterations"]), [tuple(row) for row in saved["sewn_energy"].tolist()])
-        return Sewn(garment, net, node_map, points, saved["sewn_seam_gaps"], relaxation,
-                    RelaxResult(int(saved["sewn_settling_iterations"])), float(saved["sewn_dt"]))
+        return Sewn(garment, net, node_map, points, saved["sewn_seam_gaps"], _log(saved, "sewn"),
+                    _log(saved, "sewn_settling"), float(saved["sewn_dt"]))
 
     def save_sewn(self, sewn: Sewn, wall_seconds: float) -> None:
         """Save the garment as sewn, after ``wall_seconds`` [s] of the drape."""
         self._sewn = {
             "sewn_points": sewn.points.astype(np.float64), "sewn_seam_gaps": np.asarray(sewn.seam_gaps, np.float64),
-            "sewn_energy": np.asarray(sewn.relaxation.energy, np.float64).reshape(-1, 2),
-            "sewn_iterations": sewn.relaxation.iterations, "sewn_settling_iterations": sewn.settling.iterations,
+            **_log_arrays(sewn.relaxation, "sewn"), **_log_arrays(sewn.settling, "sewn_settling"),
             "sewn_dt": sewn.dt, "wall_seconds": wall_seconds,
         }
         self._write(**self._sewn)
@@ -119,6 +117,8 @@ class DrapeCheckpoint:
 
 
 def _log_arrays(log: RelaxResult, name: str) -> dict:
+    """A relaxation's log as the checkpoint's arrays ``name_energy``, ``name_iterations`` and
+    ``name_converged``; :func:`_log` reads them back."""
     return {f"{name}_energy": np.asarray(log.energy, np.float64).reshape(-1, 2), f"{name}_iterations": log.iterations,
             f"{name}_converged": log.converged}
 
