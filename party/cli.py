@@ -13,6 +13,8 @@ from .errors import InvalidInput, PartyError
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                   help="PARTY dress simulator: the paper's experiments and garment draping.")
 err = Console(stderr=True)
+INTERRUPTED = 130
+"""Exit status of a run stopped by Ctrl-C (SIGINT), as shells give it."""
 out = Console()
 
 OPEN_SEAM_MM = 1.0
@@ -182,12 +184,14 @@ def main() -> None:
         raise SystemExit(1)
     except (typer.Abort, KeyboardInterrupt):
         err.print("interrupted; rerun with --resume to continue")
-        raise SystemExit(130)
+        raise SystemExit(INTERRUPTED)
     except Exception as exc:
         if not _is_usage_error(exc):
             raise
         exc.show()
         raise SystemExit(exc.exit_code)
+    if status == INTERRUPTED:  # typer turns Ctrl-C into Exit(130)
+        err.print("interrupted; rerun with --resume to continue")
     if isinstance(status, int) and status:
         raise SystemExit(status)
 

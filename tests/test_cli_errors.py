@@ -1,8 +1,10 @@
 """Bad input and blow-ups: one line naming the problem, non-zero exit, results kept."""
 
 import json
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -128,6 +130,25 @@ def test_resume_continues_where_it_stopped(tmp_path):
     a = trimesh.load(tmp_path / "frames" / "frame_000004.ply", process=False).vertices
     b = trimesh.load(tmp_path / "fresh" / "frames" / "frame_000004.ply", process=False).vertices
     assert np.allclose(a, b, atol=1e-6)
+
+
+def test_ctrl_c_says_how_to_go_on_and_exits_130(tmp_path):
+    """A run stopped by Ctrl-C (SIGINT) once it has written a checkpoint ends with one line
+    saying how to go on, exit status 130, and the checkpoint kept."""
+    out = tmp_path / "o"
+    running = subprocess.Popen([sys.executable, "-m", "party.cli", "run", "sphere-drop", "--grid", "32", "--duration",
+                                "100", "--out", str(out), "--no-progress"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 300
+    while not (out / "checkpoint.npz").exists() and running.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    running.send_signal(signal.SIGINT)
+    _, stderr = running.communicate(timeout=120)
+    assert running.returncode == 130
+    assert stderr.strip().splitlines()[-1] == "interrupted; rerun with --resume to continue"
+    assert "Traceback" not in stderr
+    assert (out / "checkpoint.npz").exists()
 
 
 def test_help_gives_the_units_of_each_quantity():
