@@ -150,24 +150,30 @@ def validate_command(
     solver: str = typer.Option("explicit", "--solver", help="explicit (the paper's, the reference) or implicit."),
     out_dir: Path = typer.Option(Path("out/validate"), "--out", help="Output folder (results.json and PNG plots)."),
     quick: bool = typer.Option(False, "--quick", help="Coarse resolutions: the CI's run."),
+    resume: bool = typer.Option(False, "--resume", help="Keep the cases OUT/results.json holds for the same fabric, "
+                                "solver and resolution; run the rest."),
 ) -> None:
     """Run the validation cases and print each quantity against its reference; exit status 1
-    when any misses its tolerance."""
+    when any misses its tolerance. results.json is written after each case."""
     from .fabric import fabric_by_name
     from .solvers.select import check_solver
     from .validate import case_names, run_validation
-    from .validate.report import print_table, write_results
+    from .validate.report import print_table, read_results, write_results
 
     names = case_names(case)
     chosen = None if fabric is None else fabric_by_name(fabric)
     check_solver(solver)
     out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / "results.json"
+    settings = {"fabric": fabric, "fabric_properties": None if chosen is None else chosen.to_dict(), "solver": solver,
+                "quick": quick}
+    kept = read_results(path, settings) if resume else {}
     with out.status("validating") as status:
-        results = run_validation(names, chosen, solver, out_dir, quick=quick,
-                                 on_case=lambda name: status.update(f"validating: {name}"))
+        results = run_validation(names, chosen, solver, out_dir, quick=quick, kept=kept,
+                                 on_case=lambda name: status.update(f"validating: {name}"),
+                                 on_result=lambda done: write_results(done, path, settings, complete=False))
     print_table(results, out)
-    write_results(results, out_dir / "results.json",
-                  {"cases": names, "fabric": fabric, "solver": solver, "quick": quick})
+    write_results(results, path, settings)
     failed = [c for r in results for c in r.checks if not c.passed]
     out.print(f"{sum(len(r.checks) for r in results) - len(failed)} of {sum(len(r.checks) for r in results)} checks "
               f"passed; results in {out_dir}/results.json")

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from party.fabric import fabric_by_name
-from party.validate import cantilever, catenary, cusick, friction, oscillation, restitution
+from party.validate import (CaseResult, Check, cantilever, catenary, cusick, friction, oscillation, restitution,
+                            run_validation)
 from party.validate.references import chord_angle, elastic_catenary, heavy_elastica
 
 SOLVERS = ("explicit", "implicit")
@@ -132,6 +133,37 @@ def test_validate_command_exits_non_zero_when_a_case_misses(tmp_path):
     results = json.loads((tmp_path / "out" / "results.json").read_text())
     checks = results["cases"][0]["checks"]
     assert results["passed"] is False and checks[0]["passed"] and not checks[1]["passed"]
+
+
+def test_validate_resumed_keeps_the_cases_of_the_same_settings(tmp_path):
+    """With --resume the cases results.json holds for the same fabric, solver and resolution are
+    kept as they were (a time no run gives shows it), and a run with other settings keeps none."""
+    first = party("validate", "--case", "restitution", "--quick", "--out", str(tmp_path))
+    assert first.returncode == 0, first.stderr
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert results["complete"] is True
+    results["cases"][0]["wall_seconds"] = 12345.0
+    (tmp_path / "results.json").write_text(json.dumps(results))
+
+    kept = party("validate", "--case", "restitution", "--quick", "--out", str(tmp_path), "--resume")
+    assert kept.returncode == 0, kept.stderr
+    assert json.loads((tmp_path / "results.json").read_text())["cases"] == results["cases"]
+
+    other = party("validate", "--case", "restitution", "--quick", "--solver", "implicit", "--out", str(tmp_path),
+                  "--resume")
+    assert other.returncode == 0, other.stderr
+    assert json.loads((tmp_path / "results.json").read_text())["cases"][0]["wall_seconds"] < 12345.0
+
+
+def test_validation_runs_the_cases_not_kept_and_reports_after_each(tmp_path):
+    """A case kept from an earlier run is taken as it is; the others run, and ``on_result``
+    hears of the results so far after each case run (results.json is written there)."""
+    kept = CaseResult("restitution", [Check.report("restitution", "kept", 1.0)])
+    reports = []
+    results = run_validation(["restitution", "friction"], None, "explicit", tmp_path, quick=True,
+                             kept={"restitution": kept}, on_result=lambda done: reports.append([r.name for r in done]))
+    assert results[0] is kept and results[1].name == "friction" and results[1].checks
+    assert reports == [["restitution", "friction"]]
 
 
 def test_validate_unknown_case_is_one_line_error(tmp_path):

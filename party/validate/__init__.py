@@ -39,14 +39,19 @@ def case_names(name: str | None) -> list[str]:
 
 
 def run_validation(names: list[str], fabric: Fabric | None, solver: str, out: Path | None, *, quick: bool = False,
-                   on_case: Callable[[str], None] | None = None) -> list[CaseResult]:
+                   on_case: Callable[[str], None] | None = None, kept: dict[str, CaseResult] | None = None,
+                   on_result: Callable[[list[CaseResult]], None] | None = None) -> list[CaseResult]:
     """Run the cases ``names`` with ``solver`` and ``fabric`` (None: cotton, and every library
     fabric for the Cusick cases), writing plots into ``out``; ``on_case(name)`` is called as
-    each starts."""
+    each starts, ``on_result(results so far)`` as each ends. A case in ``kept`` (by name: the
+    results of an earlier run with the same settings) is taken from there instead of run."""
     from ..fabric import fabric_by_name
 
     results = []
     for name in names:
+        if kept and name in kept:
+            results.append(kept[name])
+            continue
         if on_case is not None:
             on_case(name)
         given = fabric if fabric is not None or name in LIBRARY_CASES else fabric_by_name(DEFAULT_FABRIC)
@@ -57,6 +62,8 @@ def run_validation(names: list[str], fabric: Fabric | None, solver: str, out: Pa
             result = CaseResult(name, [Check.decision(name, f"came to rest ({problem})", False, True)])
         result.wall_seconds = time.perf_counter() - start
         results.append(result)
+        if on_result is not None:
+            on_result(results)
     return results
 
 

@@ -6,7 +6,7 @@ import json
 import math
 from pathlib import Path
 
-from .checks import CaseResult
+from .checks import CaseResult, Check
 
 
 def _number(x: float) -> str:
@@ -52,10 +52,12 @@ def _error_text(check) -> str:
     return f"{_number(check.error)} ({check.error_kind})"
 
 
-def write_results(results: list[CaseResult], path: Path, settings: dict) -> None:
-    """``results.json``: the settings, and per case its checks, plots, figures and time."""
+def write_results(results: list[CaseResult], path: Path, settings: dict, complete: bool = True) -> None:
+    """``results.json``: the settings, and per case its checks, plots, figures and time;
+    ``complete`` False while cases are still to run (written after each case, atomically)."""
     document = {
         "settings": settings,
+        "complete": complete,
         "passed": all(r.passed for r in results),
         "cases": [{
             "case": r.name,
@@ -66,7 +68,26 @@ def write_results(results: list[CaseResult], path: Path, settings: dict) -> None
             "details": r.details,
         } for r in results],
     }
-    path.write_text(json.dumps(document, indent=1, default=_plain))
+    partial = path.with_name(path.name + ".part")
+    partial.write_text(json.dumps(document, indent=1, default=_plain))
+    partial.replace(path)
+
+
+def read_results(path: Path, settings: dict) -> dict[str, CaseResult]:
+    """The cases ``results.json`` at ``path`` holds, by name, where it was written with the same
+    ``settings`` (fabric, solver, resolution; the cases asked for may differ); none otherwise."""
+    try:
+        document = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+    if document.get("settings") != settings:
+        return {}
+    kept = {}
+    for case in document.get("cases", []):
+        checks = [Check(**{k: (math.nan if v is None else v) for k, v in c.items()}) for c in case["checks"]]
+        plots = [path.parent / p for p in case["plots"]]
+        kept[case["case"]] = CaseResult(case["case"], checks, plots, case["details"], case["wall_seconds"])
+    return kept
 
 
 def _plain(value):
