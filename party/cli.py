@@ -104,7 +104,7 @@ def drape_command(
     images: bool = typer.Option(True, "--images/--no-images", help="Render front, side and back views."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show progress bars."),
     resume: bool = typer.Option(False, "--resume",
-                                help="Go on from OUT/checkpoint.npz (the sewn garment, then the draping)."),
+                                help="Go on from OUT/checkpoint.npz (the sewing's last stage done, or the draping)."),
 ) -> None:
     """Sew a pattern onto a body and drape it under gravity."""
     from .fabric import fabric_by_name

@@ -56,7 +56,8 @@ class DrapeCheckpoint:
         except (OSError, ValueError, KeyError) as error:
             raise InvalidInput(f"{self.path} is not a drape checkpoint ({error}); remove it or drop --resume") from None
         ours = json.loads(self.inputs)
-        differing = sorted(k for k in ours.keys() | theirs.keys() if ours.get(k) != theirs.get(k))
+        differing = sorted(k for k in ours.keys() | theirs.keys()  # as written: a NaN equals itself there
+                           if json.dumps(ours.get(k), sort_keys=True) != json.dumps(theirs.get(k), sort_keys=True))
         if differing:
             raise InvalidInput(f"{self.path} belongs to another drape (different {', '.join(differing)}); "
                                "remove it or drop --resume")

@@ -80,8 +80,8 @@ def read_results(path: Path, settings: dict) -> dict[str, CaseResult]:
         document = json.loads(path.read_text())
     except (OSError, ValueError):
         return {}
-    if document.get("settings") != settings:
-        return {}
+    if json.dumps(document.get("settings"), sort_keys=True) != json.dumps(settings, sort_keys=True, default=_plain):
+        return {}  # compared as written: a NaN equals itself there
     kept = {}
     for case in document.get("cases", []):
         checks = [Check(**{k: (math.nan if v is None else v) for k, v in c.items()}) for c in case["checks"]]
