@@ -1,4 +1,4 @@
-"""``party drape --resume``: a drape stopped while it drapes goes on from its checkpoint."""
+"""``party drape --resume``: a drape stopped while it sews or drapes goes on from its checkpoint."""
 
 import json
 import signal
