@@ -26,10 +26,11 @@ def write_mesh(path: Path, points: np.ndarray, faces: np.ndarray, uv: np.ndarray
     os.replace(tmp, path)
 
 
-def write_json(path: Path, data: dict) -> None:
+def write_json(path: Path, data: dict, default=None) -> None:
+    """Write ``data`` as JSON atomically; ``default`` as :func:`json.dumps` takes it."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".part")
-    tmp.write_text(json.dumps(data, indent=2, sort_keys=False) + "\n")
+    tmp.write_text(json.dumps(data, indent=2, sort_keys=False, default=default) + "\n")
     os.replace(tmp, path)
 
 

@@ -6,6 +6,7 @@ import json
 import math
 from pathlib import Path
 
+from ..output.frames import write_json
 from .checks import CaseResult, Check
 
 
@@ -68,9 +69,7 @@ def write_results(results: list[CaseResult], path: Path, settings: dict, complet
             "details": r.details,
         } for r in results],
     }
-    partial = path.with_name(path.name + ".part")
-    partial.write_text(json.dumps(document, indent=1, default=_plain))
-    partial.replace(path)
+    write_json(path, document, default=_plain)
 
 
 def read_results(path: Path, settings: dict) -> dict[str, CaseResult]:
