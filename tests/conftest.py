@@ -1,15 +1,17 @@
 import os
+import subprocess
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from party import device, launch
+
 if os.environ.get("PYTEST_XDIST_WORKER") and "PARTY_THREADS" not in os.environ:
     # pytest-xdist runs a test process per core: each keeps to its share of the cores, since
     # the implicit solver's workers spin at barriers (docs/design.md, Kernels and CPU threads)
-    _cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    os.environ["PARTY_THREADS"] = str(max(1, _cores // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
-
-from party import device
+    os.environ["PARTY_THREADS"] = str(max(1, launch._CORES // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -27,6 +29,13 @@ def simulate(model, solver, steps: int, dt: float, control=None, every: int = 0,
         if every and (k + 1) % every == 0:
             callback(state, k + 1)
     return state
+
+
+def wait_for_file(path: Path, running: subprocess.Popen, seconds: float = 300.0) -> None:
+    """Wait until ``path`` exists, ``running`` has ended or ``seconds`` have passed."""
+    deadline = time.monotonic() + seconds
+    while not path.exists() and running.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
 
 
 @pytest.fixture

@@ -4,10 +4,10 @@ import json
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
+from conftest import wait_for_file
 import warp as wp
 
 from party.errors import InvalidInput, SimulationUnstable
@@ -140,9 +140,7 @@ def test_ctrl_c_says_how_to_go_on_and_exits_130(tmp_path):
                                 "100", "--out", str(out), "--no-progress"], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True,
                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    deadline = time.monotonic() + 300
-    while not (out / "checkpoint.npz").exists() and running.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.05)
+    wait_for_file(out / "checkpoint.npz", running)
     running.send_signal(signal.SIGINT)
     _, stderr = running.communicate(timeout=120)
     assert running.returncode == 130

@@ -4,11 +4,11 @@ import json
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import wait_for_file
 
 from party.body.load import load_body
 from party.fabric import fabric_by_name
@@ -120,9 +120,7 @@ def test_resuming_from_another_drapes_checkpoint_is_refused_in_one_line(tmp_path
     command = [sys.executable, "-m", "party.cli", "drape", str(DRESS), "--out", str(out), "--spacing-mm",
                str(1000 * SPACING), "--no-images", "--no-progress"]
     running = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 300
-    while not (out / "checkpoint.npz").exists() and running.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.05)
+    wait_for_file(out / "checkpoint.npz", running)
     running.send_signal(signal.SIGKILL)
     running.wait()
     assert (out / "checkpoint.npz").exists()

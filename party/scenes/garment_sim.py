@@ -178,7 +178,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     net, node_map = garment.sewn()
     pairs = sewing_pairs(node_map)
     stage = resume.stage if resume else None
-    result = _copy(resume.relaxation) if resume else RelaxResult()
+    result = resume.relaxation.copy() if resume else RelaxResult()
     if stage is None:
         model = _panels_model(garment, fabric, dress(garment, body, device=device or "cpu"), body, pairs, np.inf,
                               device)
@@ -224,7 +224,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
     settling = SolverRelax(joined, collision=replace(SEWING_COLLISION, cloth=True), max_speed=1.0)
     settling_dt = relax_time_step(joined, "explicit")
     resumed = stage == "settling"
-    tail = _copy(resume.settling) if resumed else RelaxResult()
+    tail = resume.settling.copy() if resumed else RelaxResult()
     overstretched = list(resume.overstretched) if resumed else []
     for round_ in range(resume.rounds if resumed else 0, SETTLING_ROUNDS):
         overstretched.append(_overstretched(joined, state.positions()))
@@ -243,12 +243,8 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
 def _reached(on_stage: Callable[[SewingStage], None] | None, stage: SewingStage) -> str:
     """Report ``stage`` to ``on_stage``, its logs as they are now; its name."""
     if on_stage is not None:
-        on_stage(replace(stage, relaxation=_copy(stage.relaxation), settling=_copy(stage.settling)))
+        on_stage(replace(stage, relaxation=stage.relaxation.copy(), settling=stage.settling.copy()))
     return stage.stage
-
-
-def _copy(log: RelaxResult) -> RelaxResult:
-    return RelaxResult(log.iterations, list(log.energy), log.converged)
 
 
 def _panels_model(garment: Garment, fabric: Fabric, points: np.ndarray, body: Body, pairs: np.ndarray,

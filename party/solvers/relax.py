@@ -50,6 +50,10 @@ class RelaxResult:
     def final_energy(self) -> float:
         return self.energy[-1][1] if self.energy else float("nan")
 
+    def copy(self) -> "RelaxResult":
+        """This log as it is now, to keep while this one goes on."""
+        return RelaxResult(self.iterations, list(self.energy), self.converged)
+
     def extend(self, more: "RelaxResult") -> None:
         """Add relaxation ``more``, run on from where this one stopped: its iterations counted
         on from this one's, its outcome the latest."""
