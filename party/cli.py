@@ -189,14 +189,13 @@ def main() -> None:
         err.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
         raise SystemExit(1)
     except (typer.Abort, KeyboardInterrupt):
-        err.print("interrupted; rerun with --resume to continue")
-        raise SystemExit(INTERRUPTED)
+        status = INTERRUPTED
     except Exception as exc:
         if not _is_usage_error(exc):
             raise
         exc.show()
         raise SystemExit(exc.exit_code)
-    if status == INTERRUPTED:  # typer turns Ctrl-C into Exit(130)
+    if status == INTERRUPTED:  # typer also turns Ctrl-C into Exit(130) itself
         err.print("interrupted; rerun with --resume to continue")
     if isinstance(status, int) and status:
         raise SystemExit(status)
