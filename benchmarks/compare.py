@@ -40,13 +40,14 @@ up to a fifth either way), and the outcome is the first run's.
 party runs on the CPU, as the peers do, also where a GPU is present (``benchmarks/gpu.py``
 measures the GPU). Writes ``OUT/compare.csv`` and ``OUT/compare.png`` (a bar chart), and each
 run's results as it finishes (``OUT/runs.jsonl``, :mod:`run_log`): ``--resume`` goes on from
-there, running only what the log does not hold.
+there, running only what the log does not hold from the same code (:func:`code_digest`).
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import json
 import subprocess
 import sys
@@ -131,15 +132,28 @@ def in_turns(scene: str, systems: list[str], repeats: int, key: str, run, log, s
     for round_ in range(repeats):
         for system in systems:
             turn = f" (run {round_ + 1} of {repeats})" if repeats > 1 else ""
-            row = log.get(scene, system, round_, settings)
+            row = log.get(scene, system, round_, {**settings, "code": code_digest(system)})
             print(f"{scene}: {system}{turn}{' (kept from an earlier run)' if row else ''} ...", flush=True)
             if row is None:
                 row = run(system)
                 if "error" not in row:  # a failed run is run again when resumed
-                    log.put(scene, system, round_, settings, row)
+                    log.put(scene, system, round_, {**settings, "code": code_digest(system)}, row)
             runs[system].append(row)
             print(f"    {describe(runs[system][-1])}", flush=True)
     return [{"scene": scene, "system": system, **median_run(results, key)} for system, results in runs.items()]
+
+
+@functools.cache
+def code_digest(system: str) -> str:
+    """A digest of the code that ``system``'s runs depend on (:func:`run_log.source_digest`):
+    party's runs on the package and these benchmarks, a peer's on its script, these benchmarks
+    and the fabric it is handed; a run kept by an older ``--resume`` log is made again when it
+    changed."""
+    from run_log import source_digest
+
+    if system in PEERS:
+        return source_digest([HERE / "peers", *HERE.glob("*.py")], sphere_fabric_json())
+    return source_digest([HERE.parent / "party", *HERE.glob("*.py")])
 
 
 def median_run(results: list[dict], key: str) -> dict:

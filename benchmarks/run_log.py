@@ -3,8 +3,9 @@
 ``OUT/runs.jsonl`` holds a line per finished run: its scene, system, round, the settings it ran
 with and its row of results; ``OUT/runs/*.npz`` the final points [m] and triangles of the runs
 that have them, which the report compares shapes with. A resumed comparison takes every run
-the log holds for the same scene, system, round and settings, and runs the rest; without
-``--resume`` the log starts empty.
+the log holds for the same scene, system, round and settings, made by the same code (the
+settings carry a digest of the sources the system's runs depend on, :func:`source_digest`), and
+runs the rest; without ``--resume`` the log starts empty.
 """
 
 from __future__ import annotations
@@ -17,6 +18,20 @@ from pathlib import Path
 import numpy as np
 
 ARRAYS = ("points", "triangles")
+
+
+def source_digest(paths: list[Path], extra: str = "") -> str:
+    """A digest of the files under ``paths`` (names and contents, compiled caches left out) and
+    of ``extra``: what a kept run was made with, so that one made before the code changed is run
+    again rather than reported as this code's."""
+    digest = hashlib.sha1(extra.encode())
+    for root in paths:
+        files = [root] if root.is_file() else sorted(p for p in root.rglob("*") if p.is_file())
+        for path in files:
+            if "__pycache__" in path.parts or path.suffix == ".pyc":
+                continue
+            digest.update(path.as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
 
 
 class RunLog:
@@ -60,3 +75,4 @@ class RunLog:
         with open(self.path, "a") as log:
             log.write(json.dumps(entry) + "\n")
         self._done[key] = entry
+

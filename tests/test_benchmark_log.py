@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from run_log import RunLog  # noqa: E402
+from run_log import RunLog, source_digest  # noqa: E402
 
 
 def test_kept_runs_come_back_with_their_arrays_and_only_for_the_same_settings(tmp_path):
@@ -27,3 +27,21 @@ def test_kept_runs_come_back_with_their_arrays_and_only_for_the_same_settings(tm
     assert np.array_equal(kept["triangles"], row["triangles"])
     assert log.get("sphere 16", "party-implicit", 0, {"seconds": 2.0}) is None
     assert log.get("sphere 16", "party-implicit", 1, {"seconds": 1.0}) is None
+
+
+def test_the_source_digest_changes_with_a_file_or_the_extra_text_and_not_with_compiled_caches(tmp_path):
+    (tmp_path / "pkg" / "__pycache__").mkdir(parents=True)
+    (tmp_path / "pkg" / "solver.py").write_text("DT = 1 / 300\n")
+    (tmp_path / "script.py").write_text("print(1)\n")
+    paths = [tmp_path / "pkg", tmp_path / "script.py"]
+    first = source_digest(paths, "cotton")
+
+    (tmp_path / "pkg" / "__pycache__" / "solver.cpython-311.pyc").write_bytes(b"\x00\x01")
+    assert source_digest(paths, "cotton") == first
+    assert source_digest(paths, "denim") != first
+    (tmp_path / "pkg" / "solver.py").write_text("DT = 1 / 150\n")
+    assert source_digest(paths, "cotton") != first
+    (tmp_path / "pkg" / "solver.py").write_text("DT = 1 / 300\n")
+    assert source_digest(paths, "cotton") == first
+    (tmp_path / "pkg" / "solver.py").rename(tmp_path / "pkg" / "step.py")
+    assert source_digest(paths, "cotton") != first
