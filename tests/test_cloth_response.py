@@ -18,10 +18,12 @@ DT = 1.0e-4
 GAMMA, KAPPA = 0.5, 0.23
 
 
-def node_hits_triangle_vertex(v0, v1=(0.0, 0.0, 0.0), gamma=GAMMA):
+def node_hits_triangle_vertex(v0, v1=(0.0, 0.0, 0.0), gamma=GAMMA, kappa=KAPPA):
     """A lone node moving straight at vertex a of a free triangle (a node-node case: the
-    struck point has barycentric weights (1, 0, 0)). Gravity off, no springs act."""
-    fabric = wool_flannel().with_(momentum_propagation=gamma, tensile_warp=1e-9, tensile_weft=1e-9, damping=0.0)
+    struck point has barycentric weights (1, 0, 0)). Gravity off, no springs act. Returns the
+    velocities after one step, the node's index and the masses [kg]."""
+    fabric = wool_flannel().with_(momentum_propagation=gamma, cloth_friction=kappa, tensile_warp=1e-9,
+                                  tensile_weft=1e-9, damping=0.0)
     net = rectangular_net(0.02, 0.02, 0.02)  # one quad: 4 nodes, 2 triangles
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     b.add_cloth(net, fabric, np.c_[net.uv, np.zeros(4)])
@@ -32,12 +34,12 @@ def node_hits_triangle_vertex(v0, v1=(0.0, 0.0, 0.0), gamma=GAMMA):
     velocity[hitter] = v0
     state, out = model.state(velocity=velocity), model.state()
     SolverExplicit(model, collision=CollisionSettings(body=False, passes=1)).step(state, out, model.control(), DT)
-    return out.velocities(), hitter
+    return out.velocities(), hitter, model.host["mass"]
 
 
 def test_eqs_13_14_node_node():
     v0 = np.array([0.0, 0.0, -20.0])
-    v, hitter = node_hits_triangle_vertex(v0)
+    v, hitter, _ = node_hits_triangle_vertex(v0)
     assert np.allclose(v[hitter], KAPPA * GAMMA * v0, atol=1e-5)           # (13)
     assert np.allclose(v[0], KAPPA * (0.0 + (1 - GAMMA) * v0), atol=1e-5)  # (14)
     assert np.allclose(v[1:4], 0.0, atol=1e-6)
@@ -46,9 +48,22 @@ def test_eqs_13_14_node_node():
 def test_exchange_is_taken_in_the_struck_points_frame():
     """With the struck node moving too, eqs. (13)-(14) apply to the velocity relative to it."""
     v0, v1 = np.array([0.0, 3.0, -20.0]), np.array([0.0, 1.0, -2.0])
-    v, hitter = node_hits_triangle_vertex(v0, v1)
+    v, hitter, _ = node_hits_triangle_vertex(v0, v1)
     assert np.allclose(v[hitter], v1 + KAPPA * GAMMA * (v0 - v1), atol=1e-4)
     assert np.allclose(v[0], v1 + KAPPA * (1 - GAMMA) * (v0 - v1), atol=1e-4)
+
+
+def test_free_exchange_stops_the_approach_and_keeps_the_sliding():
+    """gamma = kappa = 1 (the sewing's settling, ``SETTLING_EXCHANGE``): eqs. (13)-(14) change
+    nothing, and the approach left is stopped along the normal, momentum kept; the sliding stays."""
+    from party.scenes.garment_sim import SETTLING_EXCHANGE
+
+    v0 = np.array([0.0, 3.0, -20.0])
+    v, hitter, mass = node_hits_triangle_vertex(v0, gamma=SETTLING_EXCHANGE[0], kappa=SETTLING_EXCHANGE[1])
+    assert v[hitter][2] == pytest.approx(v[0][2], abs=1e-5)  # no approach left
+    assert mass[hitter] * v[hitter][2] + mass[0] * v[0][2] == pytest.approx(mass[hitter] * v0[2], rel=1e-5)
+    assert v[hitter][:2] == pytest.approx(v0[:2], abs=1e-5) and np.allclose(v[0][:2], 0.0, atol=1e-6)
+    assert np.allclose(v[1:4], 0.0, atol=1e-6)
 
 
 def test_mesh_neighbours_are_excluded():

@@ -62,6 +62,15 @@ and closed in 18,450."""
 SEWING_ROUNDS = 4
 """Most rounds of ``max_iterations`` the sewing's first stage takes while seams are open."""
 
+SETTLING_EXCHANGE = (1.0, 1.0)
+"""The settling's cloth-cloth exchange (gamma, kappa of eqs. 13-14): with both 1 a contact only
+stops the approach along its normal and leaves the sliding along the layer as it was, as the
+sewing leaves out skin friction. The fabric's own (wool flannel's 0.5 and 0.23) cut a node's
+whole velocity in contact to a tenth, sliding included, and the plastic limit's pull with it:
+GarmentCode's flare dress at 9 mm kept a neckline edge caught between layers at 1.97 times its
+limit through every iteration of six rounds, the limit's 32 sweeps undone by each Collision()
+(docs/design.md, Sewing)."""
+
 SETTLING_ROUNDS = 6
 OVERSTRETCHED = 1.5
 """The settling stage (the joined garment under its plastic limit) goes on for up to
@@ -166,9 +175,9 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
        pulls the last millimetres shut as a constraint (the springs alone leave a gap where
        the cloth pulls against them: 5 mm on GarmentCode's jumpsuit), body collision on;
     3. the joined garment (paired nodes merged), its crossings undone, with its own plastic
-       limit and cloth-cloth collision on, so that the dynamics start from a net within its
-       limits; for more rounds while it pulls back what the first stage overstretched
-       (:data:`SETTLING_ROUNDS`).
+       limit and cloth-cloth collision on (contacts sliding freely, :data:`SETTLING_EXCHANGE`),
+       so that the dynamics start from a net within its limits; for more rounds while it pulls
+       back what the first stage overstretched (:data:`SETTLING_ROUNDS`).
 
     ``on_stage(stage)`` is called after the first stage, the closing and each settling round
     (:class:`SewingStage`), and a sewing given one as ``resume`` goes on after it. Each stage
@@ -218,7 +227,9 @@ def sew(garment: Garment, body: Body, fabric: Fabric, *, device: str | None = No
         merged /= np.bincount(node_map, minlength=net.node_count)[:, None]
         merged, _ = untangle(merged, net.triangles, device=device)
 
-    joined = garment_model(net, fabric.with_(friction=0.0), merged, body, gravity=False, device=device, sewn=False)
+    gamma, kappa = SETTLING_EXCHANGE
+    joined = garment_model(net, fabric.with_(friction=0.0, momentum_propagation=gamma, cloth_friction=kappa), merged,
+                           body, gravity=False, device=device, sewn=False)
     state = joined.state()
     settle = max(max_iterations // 4, 200)
     settling = SolverRelax(joined, collision=replace(SEWING_COLLISION, cloth=True), max_speed=1.0)
