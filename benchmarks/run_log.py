@@ -75,4 +75,3 @@ class RunLog:
         with open(self.path, "a") as log:
             log.write(json.dumps(entry) + "\n")
         self._done[key] = entry
-
