@@ -132,12 +132,13 @@ def in_turns(scene: str, systems: list[str], repeats: int, key: str, run, log, s
     for round_ in range(repeats):
         for system in systems:
             turn = f" (run {round_ + 1} of {repeats})" if repeats > 1 else ""
-            row = log.get(scene, system, round_, {**settings, "code": code_digest(system)})
+            made_with = {**settings, "code": code_digest(system)}
+            row = log.get(scene, system, round_, made_with)
             print(f"{scene}: {system}{turn}{' (kept from an earlier run)' if row else ''} ...", flush=True)
             if row is None:
                 row = run(system)
                 if "error" not in row:  # a failed run is run again when resumed
-                    log.put(scene, system, round_, {**settings, "code": code_digest(system)}, row)
+                    log.put(scene, system, round_, made_with, row)
             runs[system].append(row)
             print(f"    {describe(runs[system][-1])}", flush=True)
     return [{"scene": scene, "system": system, **median_run(results, key)} for system, results in runs.items()]
