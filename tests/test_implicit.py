@@ -13,6 +13,7 @@ from party.model import ModelBuilder
 from party.output.metrics import cloth_crossings, max_elongation
 from party.body.probe import ColliderProbe
 from party.solvers import SolverExplicit, SolverImplicit
+from party.solvers.implicit.solver import node_neighbours
 from party.solvers.select import DEFAULT_DT
 from party.solvers.explicit.solver import critical_time_step
 from party.solvers.relax import SolverRelax, total_energy
@@ -45,6 +46,34 @@ def test_implicit_rest_shape_matches_the_explicit_one():
     sag = -shapes["explicit"][:, 2].min()
     assert sag > 0.01  # a real sag, not a flat sheet
     assert np.abs(shapes["implicit"] - shapes["explicit"]).max() < 2e-3
+
+
+def test_a_nodes_neighbour_row_holds_each_element_once_and_its_bending_row_once(rng):
+    """The descent's merged rows (``node_neighbours``): every element appears once from each
+    end with its (l0, k, c), the bending matrix's off-diagonal row sums to the same (L x)_i
+    at any positions, and its diagonal is kept apart; an element doubled on one pair (as a seam
+    may lay one) takes that pair's L_ij once."""
+    net = rectangular_net(0.1, 0.06, 0.02)
+    b = ModelBuilder()
+    cloth = b.add_cloth(net, library()["cotton"], np.c_[net.uv, np.zeros(net.node_count)])
+    b.add_element(cloth.nodes([0])[0], cloth.nodes([1])[0], stiffness=7.0, damping=0.1, rest_length=0.02)
+    model = b.finalize("cpu")
+    bend = model.bending_matrix(friction=False)
+    rows = node_neighbours(model, bend)
+    n = model.node_count
+    owner = np.repeat(np.arange(n), np.diff(rows.offsets))
+    spring = rows.params[:, 1] != 0.0
+    h = model.host
+    e, params = h["elements"], h["element_params"][:, :3]
+    expected = sorted(map(tuple, np.r_[np.c_[e[:, 0], e[:, 1], params], np.c_[e[:, 1], e[:, 0], params]].round(9)))
+    found = sorted(map(tuple, np.c_[owner[spring], rows.nodes[spring], rows.params[spring, :3]].round(9)))
+    assert len(e) == len(net.elements) + 1 and found == expected
+    x = rng.normal(size=(n, 3))
+    row_sums = np.zeros((n, 3))
+    np.add.at(row_sums, owner, rows.params[:, 3:4] * (x[rows.nodes] - x[owner]))
+    assert np.allclose(row_sums, bend @ x, atol=1e-9 * np.abs(bend).max())
+    assert np.array_equal(rows.bend_diagonal, bend.diagonal())
+    assert not np.any(owner == rows.nodes)
 
 
 @pytest.mark.parametrize("name,iterations,slack", [("cotton", 10, 1e-5), ("denim", 200, 1e-5), ("denim", 20, 5e-3)])

@@ -87,20 +87,19 @@ def membrane_gradient(x_start: wp.array(dtype=wp.vec3), disp: wp.array(dtype=wp.
 @wp.struct
 class DescentTerms:
     """What a node's block descent (``descend_node`` of :func:`descent_kernels`) reads besides
-    the positions: the inertial targets ``y`` [m], masses [kg], each node's elements
-    (``spring_*``), bending rows (``bend_*``), membrane triangles (``tri_*``, ``tris``,
+    the positions: the inertial targets ``y`` [m], masses [kg], each node's neighbours through
+    its elements and bending row (``neighbour_*``, ``bend_diagonal``: the solver's
+    ``NeighbourRows``), membrane triangles (``tri_*``, ``tris``,
     ``inv_rest``, ``membrane_*``) and bending-hysteresis sliders (``slider_*``, ``hinge_*``,
     ``slip_world``); set up once per solver."""
 
     y: wp.array(dtype=wp.vec3)
     mass: wp.array(dtype=float)
     inv_mass: wp.array(dtype=float)
-    spring_offsets: wp.array(dtype=int)
-    spring_other: wp.array(dtype=int)
-    spring_params: wp.array(dtype=wp.vec3)
-    bend_offsets: wp.array(dtype=int)
-    bend_nodes: wp.array(dtype=int)
-    bend_values: wp.array(dtype=float)
+    neighbour_offsets: wp.array(dtype=int)
+    neighbour_nodes: wp.array(dtype=int)
+    neighbour_params: wp.array(dtype=wp.vec4)
+    bend_diagonal: wp.array(dtype=float)
     tri_offsets: wp.array(dtype=int)
     tri_slots: wp.array(dtype=int)
     tris: wp.array(dtype=int, ndim=2)
@@ -202,28 +201,25 @@ def descent_kernels(with_extra: bool) -> DescentKernels:
         inertia = terms.mass[i] * inv_dt * inv_dt
         grad = inertia * (di - terms.y[i])
         hess = inertia * wp.identity(n=3, dtype=float)
-        diagonal = float(0.0)
-        for j in range(terms.spring_offsets[i], terms.spring_offsets[i + 1]):
-            k = terms.spring_other[j]
-            p = terms.spring_params[j]
-            d = moved_from(x_start, disp, k, xi, di)
-            length = wp.length(d)
-            if length > 1.0e-12:
-                inv_length = 1.0 / length
-                u = d * inv_length
-                grad -= p[1] * (length - p[0]) * u
-                slack = wp.max(0.0, 1.0 - p[0] * inv_length)
-                hess += (p[1] * (1.0 - slack)) * wp.outer(u, u)
-                diagonal += p[1] * slack
+        diagonal = float(terms.bend_diagonal[i])
+        for j in range(terms.neighbour_offsets[i], terms.neighbour_offsets[i + 1]):
+            k = terms.neighbour_nodes[j]
+            p = terms.neighbour_params[j]
+            moved_k = disp[k] - di
+            d = (x_start[k] - xi) + moved_k
+            grad += p[3] * d
+            if p[1] != 0.0:
+                length = wp.length(d)
+                if length > 1.0e-12:
+                    inv_length = 1.0 / length
+                    u = d * inv_length
+                    grad -= p[1] * (length - p[0]) * u
+                    slack = wp.max(0.0, 1.0 - p[0] * inv_length)
+                    hess += (p[1] * (1.0 - slack)) * wp.outer(u, u)
+                    diagonal += p[1] * slack
             c = p[2] * inv_dt
-            grad -= c * (disp[k] - di)
+            grad -= c * moved_k
             diagonal += c
-        for j in range(terms.bend_offsets[i], terms.bend_offsets[i + 1]):
-            k = terms.bend_nodes[j]
-            if k == i:
-                diagonal += terms.bend_values[j]
-            else:
-                grad += terms.bend_values[j] * moved_from(x_start, disp, k, xi, di)
         if wp.static(with_extra):
             extra = extra_terms(i, terms, x_start, disp)
             grad += extra.grad

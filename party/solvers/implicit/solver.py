@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 import warp as wp
@@ -108,18 +109,16 @@ class SolverImplicit:
         self._plane_offset = wp.zeros(n, dtype=float, device=dev)
         self._planes = self.collision is not None and self.collision.has_body
         self.chebyshev = float(chebyshev)
-        offsets, other, params = node_springs(model)
-        self._spring_offsets = wp.array(offsets, dtype=int, device=dev)
-        self._spring_other = wp.array(other, dtype=int, device=dev)
-        self._spring_params = wp.array(params.astype(np.float32), dtype=wp.vec3, device=dev)
         bend = model.bending_matrix(friction=False)
+        rows = node_neighbours(model, bend)
+        self._neighbour_offsets = wp.array(rows.offsets, dtype=int, device=dev)
+        self._neighbour_nodes = wp.array(rows.nodes, dtype=int, device=dev)
+        self._neighbour_params = wp.array(rows.params.astype(np.float32), dtype=wp.vec4, device=dev)
+        self._bend_diagonal = wp.array(rows.bend_diagonal.astype(np.float32), dtype=float, device=dev)
         self._slider_stiffness = slider_stiffness(model)
         self._coupling = NodeCoupling.of(model, bend)
         self._node_stiffness = self._coupling.largest_rate()
         self._scratch: State | None = None
-        self._bend_offsets = wp.array(bend.indptr.astype(np.int32), dtype=int, device=dev)
-        self._bend_nodes = wp.array(bend.indices.astype(np.int32), dtype=int, device=dev)
-        self._bend_values = wp.array(bend.data.astype(np.float32), dtype=float, device=dev)
         slider_offsets, slider_slots = node_sliders(model)
         self._slider_offsets = wp.array(slider_offsets, dtype=int, device=dev)
         self._slider_slots = wp.array(slider_slots, dtype=int, device=dev)
@@ -286,10 +285,8 @@ class SolverImplicit:
         m = self.model
         terms = DescentTerms()
         terms.y, terms.mass, terms.inv_mass = self._y, m.node_mass, m.node_inv_mass
-        terms.spring_offsets, terms.spring_other, terms.spring_params = (self._spring_offsets, self._spring_other,
-                                                                         self._spring_params)
-        terms.bend_offsets, terms.bend_nodes = self._bend_offsets, self._bend_nodes
-        terms.bend_values = self._bend_values
+        terms.neighbour_offsets, terms.neighbour_nodes = self._neighbour_offsets, self._neighbour_nodes
+        terms.neighbour_params, terms.bend_diagonal = self._neighbour_params, self._bend_diagonal
         terms.tri_offsets, terms.tri_slots, terms.tris = self._tri_offsets, self._tri_slots, m.triangle_nodes
         terms.inv_rest, terms.membrane_area, terms.membrane_c = (m.triangle_inv_rest, m.triangle_membrane_area,
                                                                  m.triangle_membrane_c)
@@ -317,16 +314,47 @@ def chebyshev_weights(iterations: int, rho: float) -> np.ndarray:
     return weights.astype(np.float32)
 
 
-def node_springs(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each node's elements, stored node by node: CSR offsets, the other node, and
-    (rest length [m], stiffness [N/m], damping [kg/s])."""
+class NeighbourRows(NamedTuple):
+    """Each node's neighbours through its elements and its row of the bending matrix L, stored
+    node by node (CSR ``offsets`` and ``nodes``), each entry's ``params`` (rest length [m],
+    stiffness [N/m], damping [kg/s], L_ij [N/m]): one entry per element, L_ij given to the first
+    element of its pair, and one more for each neighbour of L alone (no element: 0, 0, 0, L_ij);
+    and L's diagonal, ``bend_diagonal`` [N/m]. A node's descent reads each neighbour once for
+    its springs and its bending (a net's element neighbours are all in its bending row)."""
+
+    offsets: np.ndarray
+    nodes: np.ndarray
+    params: np.ndarray
+    bend_diagonal: np.ndarray
+
+
+def node_neighbours(model: Model, bend) -> NeighbourRows:
+    """The :class:`NeighbourRows` of ``model``'s elements and its bending matrix ``bend`` (SciPy CSR)."""
     h = model.host
-    e, params = h["elements"].astype(np.int64), h["element_params"]
+    n = model.node_count
+    e, element_params = h["elements"].astype(np.int64), h["element_params"]
     rows = np.concatenate([e[:, 0], e[:, 1]])
     other = np.concatenate([e[:, 1], e[:, 0]])
-    values = np.concatenate([params[:, :3], params[:, :3]])
-    offsets, order = csr_order(rows, model.node_count)
-    return offsets.astype(np.int32), other[order].astype(np.int32), values[order]
+    params = np.zeros((rows.size, 4))
+    params[:, :3] = np.concatenate([element_params[:, :3], element_params[:, :3]])
+    coo = bend.tocoo()
+    off_diagonal = coo.row != coo.col
+    bend_rows, bend_cols = coo.row[off_diagonal].astype(np.int64), coo.col[off_diagonal].astype(np.int64)
+    bend_values = coo.data[off_diagonal]
+    pair_keys, first = np.unique(rows * n + other, return_index=True)
+    bend_keys = bend_rows * n + bend_cols
+    at = np.minimum(np.searchsorted(pair_keys, bend_keys), max(pair_keys.size - 1, 0))
+    paired = pair_keys[at] == bend_keys if pair_keys.size else np.zeros(bend_keys.size, bool)
+    np.add.at(params[:, 3], first[at[paired]], bend_values[paired])
+    alone = ~paired
+    rows = np.concatenate([rows, bend_rows[alone]])
+    other = np.concatenate([other, bend_cols[alone]])
+    extra = np.zeros((int(alone.sum()), 4))
+    extra[:, 3] = bend_values[alone]
+    params = np.concatenate([params, extra])
+    offsets, order = csr_order(rows, n)
+    return NeighbourRows(offsets.astype(np.int32), other[order].astype(np.int32), params[order],
+                         np.asarray(bend.diagonal(), np.float64))
 
 
 def slider_stiffness(model: Model) -> float:
