@@ -301,8 +301,8 @@ class CollisionPipeline:
         launch(respond_body_vertices, dim=m.triangle_count,
                inputs=[x, v, m.node_inv_mass, m.node_thickness, m.triangle_nodes, state.collider_q,
                        state.collider_qd, self.body_vertex_normals, self.body_crease_normals, self.body_vertices,
-                       self.body_vertex_count, dt, self._settled, self.body_contact_face, m.collider_faces, self.dv, self.dx,
-                       self.hits], device=m.device)
+                       self.body_vertex_count, dt, self._settled, self.body_contact_face, m.collider_faces,
+                       self.dv, self.dx, self.hits], device=m.device)
         launch(apply_cloth_response, dim=m.node_count,
                inputs=[x, v, self.dv, self.dx, self.hits, self._touched], device=m.device)
 

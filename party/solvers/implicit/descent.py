@@ -239,12 +239,13 @@ def descent_kernels(with_extra: bool) -> DescentKernels:
             G_i(d_i) = m_i / (2 dt^2) |d_i - y_i|^2 + E_springs + E_dampers + E_hinges,
 
         the other nodes held (nodes of one colour share no element or hinge, so a colour runs in
-        parallel). ``spring_*`` lists each node's elements: the other node and (l0 [m], k [N/m],
-        c [kg/s]). Springs contribute k (l - l0) d and the Hessian k (d d^T + max(0, 1 - l0/l)
-        (I - d d^T)) (projected to be positive semi-definite); the paper's dampers
-        c (v_k - v_i) with v = (x - x(t)) / dt contribute c / dt I. The hinges' energy is the
-        quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h K_h K_h^T
-        (``bend_*``: row i of L, its diagonal included; its rows sum to zero), so they add
+        parallel). ``neighbour_*`` lists each node's neighbours once, each with its element's
+        (l0 [m], k [N/m], c [kg/s]) and its bending entry L_ij (zeros where there is none; the
+        solver's ``NeighbourRows``). Springs contribute k (l - l0) d and the Hessian
+        k (d d^T + max(0, 1 - l0/l) (I - d d^T)) (projected to be positive semi-definite); the
+        paper's dampers c (v_k - v_i) with v = (x - x(t)) / dt contribute c / dt I. The hinges'
+        energy is the quadratic form x^T L x / 2 with the constant matrix L = sum_h stiffness_h
+        K_h K_h^T (its rows sum to zero; L_ii in ``bend_diagonal``), so they add
         (L x)_i = sum_j L_ij (x_j - x_i) to the gradient and L_ii I to the Hessian. Membrane
         triangles add their St. Venant-Kirchhoff terms (:func:`membrane_gradient`). Bending
         hysteresis's elements (``slider_*``: each node's stencils with a slider, entries stencil * 4
