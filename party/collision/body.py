@@ -18,6 +18,13 @@ MAX_FACES = 24
 
 
 @wp.func
+def face_normal(f: int, faces: wp.array(dtype=int, ndim=2), body_q: wp.array(dtype=wp.vec3)) -> wp.vec3:
+    """The unit normal of body face ``f`` (its corners' winding), at the positions ``body_q``."""
+    a = body_q[faces[f, 0]]
+    return wp.normalize(wp.cross(body_q[faces[f, 1]] - a, body_q[faces[f, 2]] - a))
+
+
+@wp.func
 def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float) -> bool:
     """Whether a node at ``x`` stepping ``v dt`` stays within ``margin`` [m] of ``ref``, the
     place its candidates were searched from (``margin`` is half the search margin)."""
@@ -241,7 +248,7 @@ def collide_body(
     fb = faces[best_face, 1]
     fc = faces[best_face, 2]
     a = body_q[fa]
-    nf = wp.normalize(wp.cross(body_q[fb] - a, body_q[fc] - a))
+    nf = face_normal(best_face, faces, body_q)
     n = wp.normalize(interpolate(best_w, body_normals[best_face, 0], body_normals[best_face, 1],
                                  body_normals[best_face, 2]))
     if wp.dot(n, nf) <= 0.0:

@@ -25,7 +25,7 @@ import warp as wp
 
 from ..body.relief import vertex_relief
 from ..model import Model
-from .body import EDGE_TOLERANCE, covered
+from .body import EDGE_TOLERANCE, covered, face_normal
 from .geometry import closest_point_barycentric, interpolate, triangle_step
 from .nearest import keep_nearest
 
@@ -279,10 +279,9 @@ def respond_body_vertices(
             dxk = w[k] / w2 * dxp
             f = contact_face[node]
             if f >= 0:
-                fa = body_q[faces[f, 0]]
-                m = wp.normalize(wp.cross(body_q[faces[f, 1]] - fa, body_q[faces[f, 2]] - fa))
+                m = face_normal(f, faces, body_q)
                 lift = wp.max(wp.dot(dvk, m), 0.0)
-                if lift > 0.0 and wp.dot(x[node] - fa, m) <= RESTING * thickness[node]:
+                if lift > 0.0 and wp.dot(x[node] - body_q[faces[f, 0]], m) <= RESTING * thickness[node]:
                     dvk -= lift * m
                     dxk += (lift * dt) * m
             wp.atomic_add(dv, node, dvk)

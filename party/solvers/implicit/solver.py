@@ -343,8 +343,9 @@ def node_neighbours(model: Model, bend) -> NeighbourRows:
     bend_values = coo.data[off_diagonal]
     pair_keys, first = np.unique(rows * n + other, return_index=True)
     bend_keys = bend_rows * n + bend_cols
-    at = np.minimum(np.searchsorted(pair_keys, bend_keys), max(pair_keys.size - 1, 0))
-    paired = pair_keys[at] == bend_keys if pair_keys.size else np.zeros(bend_keys.size, bool)
+    at = np.searchsorted(pair_keys, bend_keys)
+    paired = at < pair_keys.size
+    paired[paired] = pair_keys[at[paired]] == bend_keys[paired]
     np.add.at(params[:, 3], first[at[paired]], bend_values[paired])
     alone = ~paired
     rows = np.concatenate([rows, bend_rows[alone]])
