@@ -24,11 +24,12 @@ def party(*args):
 
 
 @pytest.mark.parametrize("args,message", [
-    (["--dt", "0"], "error: time step must be positive, got 0.0"),
-    (["--dt", "-1e-4"], "error: time step must be positive, got -0.0001"),
-    (["--duration", "0"], "error: duration must be positive, got 0.0"),
+    (["--dt", "0"], "error: time step must be positive and finite, got 0.0"),
+    (["--dt", "-1e-4"], "error: time step must be positive and finite, got -0.0001"),
+    (["--duration", "0"], "error: duration must be positive and finite, got 0.0"),
     (["--dt", "0.001"], "error: time step 0.001 s exceeds this net's explicit stability limit"),
     (["--spacing", "-0.01"], "error: spacing must be positive"),
+    (["--wind", "nan"], "error: --wind must be a finite speed in m/s, got nan"),
 ])
 def test_bad_run_options(tmp_path, args, message):
     result = party("run", "rod-wind", "--out", str(tmp_path / "o"), "--no-progress", *args)
@@ -40,10 +41,12 @@ def test_bad_run_options(tmp_path, args, message):
 
 @pytest.mark.parametrize("scene", ["dress", "rod-wind", "sphere-drop"])
 @pytest.mark.parametrize("args,message", [
-    (["--duration", "-1"], "error: duration must be positive, got -1.0"),
-    (["--dt", "-1e-4"], "error: time step must be positive, got -0.0001"),
+    (["--duration", "-1"], "error: duration must be positive and finite, got -1.0"),
+    (["--duration", "inf"], "error: duration must be positive and finite, got inf"),
+    (["--dt", "-1e-4"], "error: time step must be positive and finite, got -0.0001"),
+    (["--dt", "inf"], "error: time step must be positive and finite, got inf"),
 ])
-def test_every_scene_rejects_a_time_that_is_not_positive_before_setting_up(tmp_path, scene, args, message):
+def test_every_scene_rejects_a_time_that_is_not_positive_and_finite_before_setting_up(tmp_path, scene, args, message):
     quick = [] if scene == "rod-wind" else ["--quick"]  # rod-wind has no --quick
     result = party("run", scene, *quick, "--out", str(tmp_path / "o"), "--no-progress", *args)
     assert result.returncode == 1

@@ -10,7 +10,7 @@ import warp as wp
 from ..launch import launch, launch_items
 from ..model import Model, State
 from ..model.csr import csr_order
-from ..errors import InvalidInput
+from ..errors import InvalidInput, SimulationUnstable
 from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_bvh
 from .body_vertices import (MAX_VERTICES, gather_body_vertices, respond_body_vertices, vertex_boxes,
                             vertices_to_test)
@@ -269,11 +269,13 @@ class CollisionPipeline:
                     break
 
     def landing_substeps(self, state: State, dt: float) -> int:
-        """Substeps (1 to :data:`~party.collision.landing.MAX_LANDING_SUBSTEPS`) a step of ``dt``
-        [s] from ``state`` needs so that no node near a body moves farther than
-        :data:`~party.collision.landing.LANDING_REACH` of its shortest edge relative to it
-        in one substep (:mod:`party.collision.landing`; reads one number from the device). 1
-        with the interval lists' broad phase, which only the explicit solver's short steps use."""
+        """Substeps a step of ``dt`` [s] from ``state`` needs so that no node near a body moves
+        farther than :data:`~party.collision.landing.LANDING_REACH` of its shortest edge
+        relative to it in one substep, its velocity taken at both ends of the step under
+        gravity (:mod:`party.collision.landing`; reads one number from the device). 1 with the
+        interval lists' broad phase, which only the explicit solver's short steps use. Raises
+        :class:`~party.errors.SimulationUnstable` where more than
+        :data:`~party.collision.landing.MAX_LANDING_SUBSTEPS` would be needed."""
         if not self.has_body or not self.bvh:
             return 1
         m = self.model
@@ -285,9 +287,14 @@ class CollisionPipeline:
         self._most.fill_(1)
         launch(landing_substeps, dim=m.node_count,
                inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self._node_length,
-                       self.body_tree.id, m.collider_faces, state.collider_qd, self._body_speed, dt,
+                       self.body_tree.id, m.collider_faces, state.collider_qd, self._body_speed, m.gravity, dt,
                        self.margin, LANDING_REACH, self._most], device=m.device)
-        return min(int(self._most.numpy()[0]), MAX_LANDING_SUBSTEPS)
+        needed = int(self._most.numpy()[0])
+        if needed > MAX_LANDING_SUBSTEPS:
+            raise SimulationUnstable(f"a step of {dt:g} s is too long for cloth meeting the body: landing would take "
+                                     f"{needed} substeps (at most {MAX_LANDING_SUBSTEPS}); use a step of at most "
+                                     f"{dt * MAX_LANDING_SUBSTEPS / needed:.2g} s (--dt)")
+        return needed
 
     def vertex_pass(self, x: wp.array, v: wp.array, state: State, dt: float) -> None:
         """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)

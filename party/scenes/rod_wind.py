@@ -8,6 +8,8 @@ friction (eqs. 8-12) and cloth-cloth contact (eqs. 13-14) together.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..body import rod
@@ -53,6 +55,8 @@ def build(*, spacing: float = 0.0125, duration: float = 1.0, wind_speed: float =
     check_timing(duration, dt)
     if not spacing > 0 or spacing > length / 4:
         raise InvalidInput(f"spacing must be positive and below {length / 4} m, got {spacing}")
+    if not math.isfinite(wind_speed):
+        raise InvalidInput(f"--wind must be a finite speed in m/s, got {wind_speed}")
     fabric = fabric or wool_flannel()
     net = rectangular_net(width, length, spacing)
     clearance = ROD_RADIUS + 1.5 * fabric.thickness

@@ -92,11 +92,16 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
         task = bar.add_task("run", total=frames_total, completed=first_frame - 1, t=state.time)
         for frame in range(first_frame, frames_total + 1):
             start = time.perf_counter()
-            for _ in range(steps_per_frame):
-                if scene.wind is not None:
-                    control.wind = scene.wind(state.time)
-                scene.solver.step(state, scratch, control, dt)
-                state, scratch = scratch, state
+            try:
+                for _ in range(steps_per_frame):
+                    if scene.wind is not None:
+                        control.wind = scene.wind(state.time)
+                    scene.solver.step(state, scratch, control, dt)
+                    state, scratch = scratch, state
+            except SimulationUnstable:  # a step the solver refused (landing): the frames so far stand
+                summary.update(_summary_numbers(totals, frame - 1, steps_per_frame, dt), status="unstable")
+                write_json(summary_path, summary)
+                raise
             if hasattr(scene.solver, "end"):  # a crossing check the guard's interval left pending
                 scene.solver.end.flush(state)
             wp.synchronize_device(model.device)

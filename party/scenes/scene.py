@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -12,11 +13,11 @@ from ..model import Model
 
 def check_timing(duration: float, dt: float) -> None:
     """Reject a scene's simulated time ``duration`` [s] or time step ``dt`` [s] that is not
-    positive, before any set-up work."""
-    if not duration > 0:
-        raise InvalidInput(f"duration must be positive, got {duration}")
-    if not dt > 0:
-        raise InvalidInput(f"time step must be positive, got {dt}")
+    positive and finite, before any set-up work."""
+    if not 0 < duration < math.inf:
+        raise InvalidInput(f"duration must be positive and finite, got {duration}")
+    if not 0 < dt < math.inf:
+        raise InvalidInput(f"time step must be positive and finite, got {dt}")
 
 
 @dataclass

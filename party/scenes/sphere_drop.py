@@ -28,12 +28,12 @@ def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implici
           duration: float = 1.0, dt: float | None = None, device: str | None = None, quick: bool = False) -> Scene:
     """The sphere-drop scene with ``grid`` x ``grid`` nodes; ``dt`` defaults to the solver's."""
     check_solver(solver)
+    dt = DEFAULT_DT[solver] if dt is None else dt
+    check_timing(duration, dt)
     if quick:
         grid, duration = min(grid, 24), min(duration, 0.5)
     if not 2 <= grid <= 1000:
         raise InvalidInput(f"--grid must lie in 2-1000 nodes per side, got {grid}")
-    dt = DEFAULT_DT[solver] if dt is None else dt
-    check_timing(duration, dt)
     fabric = fabric_by_name(fabric) if isinstance(fabric, str) else fabric
     spacing = CLOTH_SIZE / (grid - 1)
     net = rectangular_net(CLOTH_SIZE, CLOTH_SIZE, spacing)
