@@ -69,7 +69,7 @@ def vertices_to_test(model: Model) -> np.ndarray:
     every = np.arange(total)
     rest = model.element_rest_length.numpy()
     limit = model.element_max_length.numpy()
-    limited = limit < 1.0e29
+    limited = model.limited_elements
     velocity = np.asarray(model.collider_velocity, dtype=float).reshape(-1, 3)
     if not limited.any() or model.triangle_count == 0 or np.ptp(velocity, axis=0).max(initial=0.0) > 0.0:
         return every

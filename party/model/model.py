@@ -34,7 +34,8 @@ class Model:
         element_rest_length: l0_ik [m].
         element_stiffness: e_ik as a spring constant [N/m].
         element_damping: Viscous coefficient [kg/s] of the element's damper.
-        element_max_length: (1 + L_sh) * l0 [m]; inf when the element has no plastic limit.
+        element_max_length: (1 + L_sh) * l0 [m]; 1e30 when the element has no plastic limit
+            (:attr:`limited_elements`).
         element_color_offsets, element_colored: the elements with a plastic limit, grouped so
             that no two in a group share a node (host offsets, device ids), for the
             plastic-limit passes.
@@ -152,6 +153,11 @@ class Model:
     @property
     def elements(self) -> np.ndarray:
         return self.host["elements"]
+
+    @property
+    def limited_elements(self) -> np.ndarray:
+        """Which elements have a plastic limit (bool per element, on the host)."""
+        return np.isfinite(self.host["element_params"][:, 3])
 
     @property
     def kinematic(self) -> np.ndarray:

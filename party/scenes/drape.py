@@ -131,7 +131,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
         raise SimulationUnstable("draping blew up (non-finite positions); try a coarser --spacing")
 
     host = model.host
-    limited = host["element_params"][:, 3] < 1e29
+    limited = model.limited_elements
     summary = {
         "pattern": str(pattern), "body": str(body), "fabric": fabric.name, "solver": solver, "spacing_m": spacing,
         "nodes": model.node_count, "triangles": model.triangle_count, "panels": len(the_pattern.panels),

@@ -50,7 +50,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     faces = model.triangles
     colliders = model.host["colliders"]
     host = model.host
-    limited = host["element_params"][:, 3] < 1e29
+    limited = model.limited_elements
     rest = host["element_params"][:, 0]
     probe = ColliderProbe(colliders, model.device)
 
