@@ -146,35 +146,3 @@ def test_a_sheet_dropped_in_steps_of_a_third_of_a_second_stays_within_its_plasti
     by each step's start alone, the sheet was stretched to 2.0 times rest)."""
     limit = 1.0 + fabric_by_name("cotton").strain_limit
     assert warp_weft_stretch(16, 0.3, 0.9, True, monkeypatch).max() <= limit * (1.0 + 1e-4)
-
-
-def two_sheets(gap: float):
-    """Two 10 cm squares of cotton ``gap`` [m] apart, one over the other, 0.5 m over a floor; their
-    model and pipeline, the cloth searched at rest (so that each node holds the other sheet's
-    triangles near it as candidates)."""
-    net = rectangular_net(0.1, 0.1, SPACING)
-    builder = ModelBuilder()
-    for height in (0.5, 0.5 + gap):
-        builder.add_cloth(net, fabric_by_name("cotton"), np.c_[net.uv, np.full(net.node_count, height)])
-    builder.add_collider(floor(0.0))
-    model = builder.finalize("cpu")
-    pipeline = CollisionPipeline(model, CollisionSettings(broad_phase="bvh"))
-    state = model.state()
-    pipeline.apply(state.node_q, state.node_qd, state, DT)
-    return model, pipeline
-
-
-def test_a_step_in_which_cloth_meets_another_layer_fast_is_cut_as_landing_on_a_body_is():
-    """The top sheet falls onto the bottom one at 3 m/s from 5 mm above: its nodes would stop on
-    the layer while the rest of the step moves their neighbours on (the implicit dress's skirt was
-    stretched to 1.77 times rest so). Cut as landing on a body is, by the speed against the
-    layer; falling with it, or far from it, the step is not cut."""
-    model, pipeline = two_sheets(0.005)
-    top = np.arange(model.node_count) >= model.node_count // 2
-    falling = np.zeros((model.node_count, 3))
-    falling[top, 2] = -3.0
-    assert pipeline.landing_substeps(model.state(velocity=falling), DT) == math.ceil(3.0 * DT / (LANDING_REACH * SPACING))
-    together = np.tile((0.0, 0.0, -3.0), (model.node_count, 1))
-    assert pipeline.landing_substeps(model.state(velocity=together), DT) == 1
-    model, pipeline = two_sheets(0.04)
-    assert pipeline.landing_substeps(model.state(velocity=falling), DT) == 1

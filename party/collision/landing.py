@@ -14,12 +14,6 @@ A node's motion over the step is taken at both ends of the step: its velocity at
 that velocity plus what gravity adds over the step. Judged by the start alone, cloth at rest
 over a body was never cut: a 16 x 16 sheet dropped onto the sphere in steps of 0.3 s stretched
 to 2.0 times rest, and in one step of 1 s to 15.8.
-
-Cloth meeting cloth is cut likewise (:func:`meeting_substeps`): a node that the cloth-cloth
-exchange of eqs. (13)-(14) stops within a step tugs its neighbours as one that lands on a body
-does. `party run dress --solver implicit` at 1/300 s stretched its skirt to 1.77 times rest where
-the sleeves and the skirt's layers met (1.91, 1.52 and 1.29 at 1/250, 1/350 and 1/400 s); with
-these substeps 1.24 (1.45, 1.31, 1.24).
 """
 
 from __future__ import annotations
@@ -28,7 +22,7 @@ import numpy as np
 import warp as wp
 
 from ..model import Model
-from .geometry import closest_point_barycentric, interpolate, step_box
+from .geometry import step_box
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
@@ -80,39 +74,6 @@ def landing_substeps(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), inv
         body_v = (body_qd[faces[f, 0]] + body_qd[faces[f, 1]] + body_qd[faces[f, 2]]) / 3.0
         relative = wp.max(wp.length(vi - body_v), wp.length(v_end - body_v))
         needed = wp.max(needed, int(wp.ceil(relative * dt / allowed)))
-    if needed > 1:
-        wp.atomic_max(most, 0, needed)
-
-
-@wp.kernel
-def meeting_substeps(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
-                     thickness: wp.array(dtype=float), length: wp.array(dtype=float),
-                     tris: wp.array(dtype=int, ndim=2), candidates: wp.array(dtype=int, ndim=2),
-                     candidate_count: wp.array(dtype=int), dt: float, reach: float, most: wp.array(dtype=int)):
-    """Raise ``most[0]`` to the substeps a step of ``dt`` [s] needs so that node i, where its
-    step could bring it within its thickness of one of its cloth candidate triangles, moves no
-    more than ``reach`` times its shortest edge ``length`` [m] per substep relative to that
-    triangle's nearest point."""
-    i = wp.tid()
-    if inv_mass[i] == 0.0:
-        return
-    allowed = reach * length[i]
-    xi = x[i]
-    vi = v[i]
-    needed = int(1)
-    for s in range(candidate_count[i]):
-        t = candidates[i, s]
-        a = tris[t, 0]
-        b = tris[t, 1]
-        c = tris[t, 2]
-        fastest = wp.max(wp.length(vi - v[a]), wp.max(wp.length(vi - v[b]), wp.length(vi - v[c])))
-        if fastest * dt <= allowed:
-            continue
-        w = closest_point_barycentric(xi, x[a], x[b], x[c])
-        relative = wp.length(vi - interpolate(w, v[a], v[b], v[c])) * dt
-        if wp.length(xi - interpolate(w, x[a], x[b], x[c])) - relative >= thickness[i]:
-            continue
-        needed = wp.max(needed, int(wp.ceil(relative / allowed)))
     if needed > 1:
         wp.atomic_max(most, 0, needed)
 

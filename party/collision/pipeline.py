@@ -18,8 +18,7 @@ from .bvh import TriangleBvh
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
                     gather_cloth_triangles_bvh, moved_beyond, respond_cloth, searched_velocity, sum_motion)
 from .intervals import AxisIntervalLists
-from .landing import (LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, largest_speed, meeting_substeps,
-                      shortest_edge)
+from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, largest_speed, shortest_edge
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
@@ -273,9 +272,7 @@ class CollisionPipeline:
         """Substeps a step of ``dt`` [s] from ``state`` needs so that no node near a body moves
         farther than :data:`~party.collision.landing.LANDING_REACH` of its shortest edge
         relative to it in one substep, its velocity taken at both ends of the step under
-        gravity, nor any node that may meet one of its cloth candidates within the step
-        relative to that triangle (:mod:`party.collision.landing`; reads one number from the
-        device). 1 with the
+        gravity (:mod:`party.collision.landing`; reads one number from the device). 1 with the
         interval lists' broad phase, which only the explicit solver's short steps use. Raises
         :class:`~party.errors.SimulationUnstable` where more than
         :data:`~party.collision.landing.MAX_LANDING_SUBSTEPS` would be needed."""
@@ -292,11 +289,6 @@ class CollisionPipeline:
                inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self._node_length,
                        self.body_tree.id, m.collider_faces, state.collider_qd, self._body_speed, m.gravity, dt,
                        self.margin, LANDING_REACH, self._most], device=m.device)
-        if self.has_cloth and self._cloth_searched:
-            launch(meeting_substeps, dim=m.node_count,
-                   inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self._node_length,
-                           m.triangle_nodes, self.cloth_candidates, self.cloth_candidate_count, dt, LANDING_REACH,
-                           self._most], device=m.device)
         needed = int(self._most.numpy()[0])
         if needed > MAX_LANDING_SUBSTEPS:
             raise SimulationUnstable(f"a step of {dt:g} s is too long for cloth meeting the body: landing would take "
