@@ -80,8 +80,8 @@ class DrapeCheckpoint:
         """Save the sewing as it stood after ``stage``, ``wall_seconds`` [s] into the drape."""
         self._write(sewing_stage=stage.stage, sewing_points=stage.points.astype(np.float64), sewing_dt=stage.dt,
                     **_log_arrays(stage.relaxation, "sewing"), **_log_arrays(stage.settling, "settling"),
-                    overstretched=np.asarray(stage.overstretched, np.int64), excess=np.asarray(stage.excess, np.float64),
-                    rounds=stage.rounds,
+                    overstretched=np.asarray(stage.overstretched, np.int64),
+                    excess=np.asarray(stage.excess, np.float64), rounds=stage.rounds,
                     seam_gaps=np.asarray([] if stage.seam_gaps is None else stage.seam_gaps, np.float64),
                     wall_seconds=wall_seconds)
 
