@@ -35,7 +35,8 @@ def substeps_for(start, end_of_step, relative_to=(0.0, 0.0, 0.0)) -> int:
     """The substeps of LANDING_REACH of the net's spacing for a node whose velocity [m/s] is
     ``start`` at the step's start and ``end_of_step`` at its end, relative to a body moving at
     ``relative_to``."""
-    fastest = max(np.linalg.norm(np.subtract(start, relative_to)), np.linalg.norm(np.subtract(end_of_step, relative_to)))
+    fastest = max(np.linalg.norm(np.subtract(start, relative_to)),
+                  np.linalg.norm(np.subtract(end_of_step, relative_to)))
     return math.ceil(fastest * DT / (LANDING_REACH * SPACING))
 
 
