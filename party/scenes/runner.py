@@ -92,29 +92,27 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
         task = bar.add_task("run", total=frames_total, completed=first_frame - 1, t=state.time)
         for frame in range(first_frame, frames_total + 1):
             start = time.perf_counter()
-            try:
+            try:  # a blow-up, or a step the solver refused (landing): the frames so far stand
                 for _ in range(steps_per_frame):
                     if scene.wind is not None:
                         control.wind = scene.wind(state.time)
                     scene.solver.step(state, scratch, control, dt)
                     state, scratch = scratch, state
-            except SimulationUnstable:  # a step the solver refused (landing): the frames so far stand
+                if hasattr(scene.solver, "end"):  # a crossing check the guard's interval left pending
+                    scene.solver.end.flush(state)
+                wp.synchronize_device(model.device)
+                totals["wall_seconds"] += time.perf_counter() - start
+                points = state.positions()
+                speed = np.linalg.norm(state.velocities(), axis=1).max() if model.node_count else 0.0
+                if not np.all(np.isfinite(points)) or not speed < MAX_SPEED:
+                    raise SimulationUnstable(
+                        f"simulation became unstable before t = {state.time:.4f} s (max node speed "
+                        f"{speed:.3g} m/s); frames up to {frame - 1} are kept in {out / 'frames'}; "
+                        f"try a smaller --dt, e.g. {_round_down(dt / 2):g}")
+            except SimulationUnstable:
                 summary.update(_summary_numbers(totals, frame - 1, steps_per_frame, dt), status="unstable")
                 write_json(summary_path, summary)
                 raise
-            if hasattr(scene.solver, "end"):  # a crossing check the guard's interval left pending
-                scene.solver.end.flush(state)
-            wp.synchronize_device(model.device)
-            totals["wall_seconds"] += time.perf_counter() - start
-            points = state.positions()
-            speed = np.linalg.norm(state.velocities(), axis=1).max() if model.node_count else 0.0
-            if not np.all(np.isfinite(points)) or not speed < MAX_SPEED:
-                summary.update(_summary_numbers(totals, frame - 1, steps_per_frame, dt), status="unstable")
-                write_json(summary_path, summary)
-                raise SimulationUnstable(
-                    f"simulation became unstable before t = {state.time:.4f} s (max node speed "
-                    f"{speed:.3g} m/s); frames up to {frame - 1} are kept in {out / 'frames'}; "
-                    f"try a smaller --dt, e.g. {_round_down(dt / 2):g}")
             _record(out, frame, points, faces, model, probe, limited, rest, totals)
             save_checkpoint(checkpoint, node_q=points.astype(np.float32), node_qd=state.velocities().astype(np.float32),
                             collider_q=state.collider_q.numpy(), collider_qd=state.collider_qd.numpy(),
