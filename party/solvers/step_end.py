@@ -3,6 +3,8 @@ Collision() (eq. 5), then the position update (eq. 4)."""
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 import warp as wp
 
@@ -22,6 +24,12 @@ PLASTIC_SKIPS_UNCHANGED = True
 """Sweeps of the plastic limit after the first leave out the elements whose nodes no correction
 has changed since the last sweep began (:func:`~party.solvers.explicit.kernels.plastic_limit`);
 False sweeps every element every time, to the same result bit for bit."""
+ContactResolve = Callable[[State, State, wp.array, wp.array, float, bool], "wp.array | None"]
+"""``resolve(state_in, state_out, x_before, v_before, dt, first)``: after a Collision() that
+found ``state_out``'s start positions and velocities at ``x_before`` and ``v_before`` (the
+step's first Collision() where ``first``), change ``state_out``'s velocities in place; return
+an int array flagging the nodes it changed, or None where it changed none."""
+
 PLASTIC_OVER_RELAXATION = 1.7
 """Over-relaxation of the plastic limit's sweeps for large steps and static relaxation (see
 :class:`StepEnd`)."""
@@ -70,11 +78,18 @@ class StepEnd:
             iteration and Collision() sees every step. (Seams merged after sewing left some
             elements at four times their length; the limit moved their nodes 150 mm in one
             step, beyond the collision search, and 36 of them ended inside the shoulders.)
+        contact_resolve: Called after every Collision() of a step but its last
+            (:data:`ContactResolve`): the implicit solver solves again there for the cloth
+            around the nodes Collision() stopped. The plastic limit and Collision() follow each
+            call, so that Collision() keeps the last word.
+        contact_rounds: Calls of ``contact_resolve`` a step; with it, a step runs Collision()
+            once more than this.
     """
 
     def __init__(self, model: Model, collision: CollisionSettings | None, plastic_passes: int,
                  limit_after_contact: bool = False, max_speed: float | None = None,
-                 plastic_over_relaxation: float = 1.0) -> None:
+                 plastic_over_relaxation: float = 1.0, contact_resolve: ContactResolve | None = None,
+                 contact_rounds: int = 1) -> None:
         if not 1.0 <= plastic_over_relaxation < 2.0:
             raise InvalidInput(f"plastic over-relaxation must be in [1, 2), got {plastic_over_relaxation}")
         self.model = model
@@ -91,6 +106,11 @@ class StepEnd:
         self._serial = wp.get_device(model.device).is_cpu
         self._worklists = limit_worklists(model) if self._has_limit and self._serial else None  # CPU sweeps only
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
+        self.contact_resolve = contact_resolve if self.collision is not None else None
+        self.contact_rounds = max(int(contact_rounds), 1)
+        if self.contact_resolve is not None:
+            self._x_before = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)
+            self._v_before = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)
         guarded = collision is not None and collision.cloth and collision.crossing_guard and model.triangle_count > 0
         self.guard = CrossingGuard(model, collision.guard_every) if guarded else None
         self.hysteresis = BendingHysteresis(model)
@@ -104,11 +124,23 @@ class StepEnd:
         wp.copy(state_out.collider_q, state_in.collider_q)
         wp.copy(state_out.collider_qd, state_in.collider_qd)
         if self.collision is not None:
-            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt)
-        if self.limit_after_contact:
-            self._apply_plastic_limit(state_out, dt, over_relaxation=1.0)
-            self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, continuing=True,
-                                 changed=self._moved_in if self.max_speed is None else None)
+            self._collide(state_in, state_out, dt)
+        resolving = self.contact_resolve is not None
+        for round_ in range(self.contact_rounds if resolving else int(self.limit_after_contact)):
+            resolved = self.contact_resolve(state_in, state_out, self._x_before, self._v_before, dt,
+                                            round_ == 0) if resolving else None
+            if round_ > 0 and resolved is None:
+                break  # the last Collision() moved no node's end: it stands
+            if resolved is None and not self.limit_after_contact:
+                break
+            if self._has_limit:
+                self._apply_plastic_limit(state_out, dt, over_relaxation=1.0)
+            else:
+                self._moved_in.zero_()
+            if resolved is not None:
+                launch(mark_also, dim=m.node_count, inputs=[self._moved_in, resolved], device=dev)
+            self._collide(state_in, state_out, dt, continuing=True,
+                          changed=self._moved_in if self.max_speed is None else None)
         launch(advance_positions, dim=m.node_count, inputs=[state_out.node_q, state_out.node_qd, dt], device=dev)
         if self.guard is not None:
             self.guard.apply(state_in.node_q, state_out.node_q, state_out.node_qd)
@@ -117,6 +149,14 @@ class StepEnd:
                    inputs=[state_out.collider_q, state_out.collider_qd, dt], device=dev)
         self.hysteresis.update(state_in, state_out)
         state_out.time = state_in.time + dt
+
+    def _collide(self, state_in: State, state_out: State, dt: float, **continuation) -> None:
+        """Collision() on ``state_out`` (eq. 5), recording its start positions and velocities
+        before for :attr:`contact_resolve`."""
+        if self.contact_resolve is not None:
+            wp.copy(self._x_before, state_out.node_q)
+            wp.copy(self._v_before, state_out.node_qd)
+        self.collision.apply(state_out.node_q, state_out.node_qd, state_in, dt, **continuation)
 
     def flush(self, state: State) -> None:
         """Run a crossing check that the guard's interval has left pending, so that ``state``
@@ -174,6 +214,14 @@ class StepEnd:
             if int(self._over_limit.numpy()[0]) == 0:
                 break
         return sweeps
+
+
+@wp.kernel
+def mark_also(flags: wp.array(dtype=int), more: wp.array(dtype=int)):
+    """Set ``flags[i]`` where ``more[i]`` is set."""
+    i = wp.tid()
+    if more[i] != 0:
+        flags[i] = 1
 
 
 def plastic_limit_of(model: Model) -> PlasticLimit:

@@ -19,7 +19,9 @@ from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
 from .descent import DESCENT, DescentTerms
-from .kernels import body_planes, chebyshev_blend, inertial_target, onto_planes, record_correction, step_velocity
+from ...collision.landing import shortest_edge
+from .kernels import (body_planes, chebyshev_blend, compact_by_colour, contact_changes, contact_resolve_start, contact_resolved_velocity,
+                      inertial_target, onto_planes, record_correction, spread_flags, step_velocity)
 
 
 SLIDER_STEP_RATIO = 600.0
@@ -45,6 +47,19 @@ and then let it crumple; 60 sweeps in one step held it.)"""
 
 MAX_SWEEPS = 100
 """Most sweeps :data:`STIFFNESS_PER_SWEEP` gives a (sub)step; a stiffer model takes substeps."""
+
+CONTACT_ROUNDS = 3
+"""Times a step solves again around the nodes Collision() stopped (:meth:`SolverImplicit.resolve_contacts`)."""
+
+CONTACT_SWEEPS = 5
+"""Sweeps of each such re-solve."""
+
+CONTACT_REACH = 0.01
+"""A node whose end of step Collision() moved farther than this share of its shortest edge
+starts a re-solve around it."""
+
+CONTACT_RINGS = 6
+"""Rings of neighbours (through elements and bending) around such a node that are re-solved."""
 
 
 class SolverImplicit:
@@ -94,7 +109,9 @@ class SolverImplicit:
             collision = replace(collision, broad_phase="bvh")
         self.end = StepEnd(model, collision, plastic_passes, limit_after_contact=True,
                            max_speed=kinetic_damping[0] if kinetic_damping is not None else None,
-                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION)
+                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION,
+                           contact_resolve=self.resolve_contacts if kinetic_damping is None else None,
+                           contact_rounds=CONTACT_ROUNDS)
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         dev = model.device
@@ -135,6 +152,17 @@ class SolverImplicit:
         self._sync = worker_sync(dev)
         self.workers = worker_count(len(colored), dev)
         self._terms = self._descent_terms()
+        self._contact_inv_mass = wp.zeros(n, dtype=float, device=dev)
+        self._contact_terms = self._descent_terms()
+        self._contact_terms.inv_mass = self._contact_inv_mass
+        self._node_length = wp.array(shortest_edge(model).astype(np.float32), dtype=float, device=dev)
+        self._held = wp.zeros(n, dtype=int, device=dev)
+        self._near = [wp.zeros(n, dtype=int, device=dev) for _ in range(2)]
+        self._resolved = wp.zeros(n, dtype=int, device=dev)
+        self._sources = wp.zeros(1, dtype=int, device=dev)
+        self._no_omegas = wp.zeros(0, dtype=float, device=dev)
+        self._contact_offsets = wp.zeros(len(color_offsets), dtype=int, device=dev)
+        self._contact_nodes = wp.zeros(len(colored), dtype=int, device=dev)
         self._descent = DESCENT[len(tri_slots) > 0 or self._sliding]
         self._graphs: dict = {}
         self._capture = True
@@ -221,6 +249,60 @@ class SolverImplicit:
             launch(kinetic_damping, dim=m.node_count,
                    inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=m.device)
         self.end.finish(state_in, state_out, dt)
+
+    def resolve_contacts(self, state_in: State, state_out: State, x_before: wp.array, v_before: wp.array, dt: float,
+                         first: bool) -> wp.array | None:
+        """Solve the step again for the cloth around the nodes the last Collision() stopped
+        (:data:`~party.solvers.step_end.ContactResolve`; ours, after the constraint filtering
+        of Baraff and Witkin 1998). Collision()'s eqs. (8)-(14) change a node's velocity after
+        the solve; over the paper's 0.1 ms the springs spread that change to its neighbours in
+        the next steps, but over a large step a node that meets another layer stops within the
+        step while its neighbours, solved without that stop, move on, and the last Collision()
+        leaves their elements stretched. So every node Collision() changed is held as it left
+        it (for the rest of the step), and the free nodes within :data:`CONTACT_RINGS` rings
+        of one whose end of step it moved farther than :data:`CONTACT_REACH` of its shortest
+        edge take :data:`CONTACT_SWEEPS` sweeps of the same implicit step from where they are,
+        so that they follow the held nodes within the step. Returns the nodes re-solved
+        (None where no node was moved so far; reads one number from the device).
+
+        ``party run dress --solver implicit`` (1/300 s): the largest elongation over its frames
+        went from 1.77 to 1.13 with two rounds (1.30 with one), against 1.106 with the
+        explicit solver."""
+        m = self.model
+        dev = m.device
+        if not self.collision.has_cloth:
+            return None
+        if first:
+            self._held.zero_()
+        self._sources.zero_()
+        launch(contact_changes, dim=m.node_count,
+               inputs=[x_before, v_before, state_out.node_q, state_out.node_qd, m.node_inv_mass, self._node_length, dt,
+                       CONTACT_REACH, self._held, self._near[0], self._sources], device=dev)
+        if int(self._sources.numpy()[0]) == 0:
+            return None
+        for ring in range(CONTACT_RINGS):
+            launch(spread_flags, dim=m.node_count,
+                   inputs=[self._neighbour_offsets, self._neighbour_nodes, self._near[ring % 2],
+                           self._near[(ring + 1) % 2]], device=dev)
+        launch(contact_resolve_start, dim=m.node_count,
+               inputs=[state_in.node_q, state_out.node_q, state_out.node_qd, m.node_inv_mass, self._held,
+                       self._near[CONTACT_RINGS % 2], dt, self._contact_inv_mass, self._d, self._resolved], device=dev)
+        if wp.get_device(dev).is_cpu:  # CPU threads sweep only the re-solved nodes
+            launch(compact_by_colour, dim=1,
+                   inputs=[self._color_offsets, self._colored, self._resolved, self._contact_offsets,
+                           self._contact_nodes], device=dev)
+            launch_workers(self._descent.sweep_workers, self.workers, self._sync,
+                           [CONTACT_SWEEPS, self._contact_offsets, self._no_omegas, self._contact_nodes,
+                            self._contact_terms, state_in.node_q, dt, self._d, self._d_previous, self._d_before], dev)
+        else:  # a GPU thread per node of each colour; the others have no inverse mass here and stay
+            offsets = self.color_offsets
+            for _ in range(CONTACT_SWEEPS):
+                for c in range(len(offsets) - 1):
+                    launch(self._descent.block_descent, offsets[c + 1] - offsets[c],
+                           [offsets[c], self._colored, self._contact_terms, state_in.node_q, dt, self._d], device=dev)
+        launch(contact_resolved_velocity, dim=m.node_count,
+               inputs=[state_in.node_q, state_out.node_q, self._d, self._resolved, dt, state_out.node_qd], device=dev)
+        return self._resolved
 
     def _solve(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
         """The implicit solve, from state_in to v* in state_out: launches only, no host reads,
