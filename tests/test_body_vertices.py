@@ -107,15 +107,16 @@ def test_a_body_vertex_buried_in_another_part_of_the_body_is_not_counted():
 def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothing(monkeypatch):
     """A 0.3 m cloth (2 cm net) falling 5 mm onto the cone's tip and sliding off it, 1 s of
     implicit steps, the body searched again only for the nodes (cloth triangles) that may have
-    left the region searched for them: at each of a step's two Collision()s (the second after
-    the plastic limit) each node still holds every body triangle, and each cloth triangle
-    every body vertex, that a search of its step alone (no margin) finds, though most
-    searches were left out."""
+    left the region searched for them: at each of a step's Collision()s (the first, and one to
+    ``CONTACT_ROUNDS`` after the plastic limit) each node still holds every body triangle, and
+    each cloth triangle every body vertex, that a search of its step alone (no margin) finds,
+    though most searches were left out."""
     import warp as wp
 
     from party.collision.body import MAX_FACES, gather_body_faces_bvh
     from party.collision.body_vertices import MAX_VERTICES, gather_body_vertices
     from party.collision.pipeline import CollisionPipeline
+    from party.solvers.implicit.solver import CONTACT_ROUNDS
 
     net = rectangular_net(0.3, 0.3, 0.02)
     b = ModelBuilder()
@@ -162,7 +163,7 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
     assert overflow.numpy()[0] == 0
     assert counts["needed"] > 1000 and counts["missing"] == 0
     assert counts["searched"] < 0.5 * counts["possible"]
-    assert counts["continuing"] == 300
+    assert 300 <= counts["continuing"] <= 300 * CONTACT_ROUNDS
 
 
 def test_cloth_pressed_onto_a_rim_is_pushed_up_off_its_vertices_not_outward():

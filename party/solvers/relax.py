@@ -83,7 +83,8 @@ class SolverRelax:
         if solver == "explicit":
             self.stepper = SolverExplicit(model, collision=collision, kinetic_damping=damping)
         else:
-            self.stepper = SolverImplicit(model, collision=large_step_collision(collision), kinetic_damping=damping)
+            self.stepper = SolverImplicit(model, collision=large_step_collision(collision), kinetic_damping=damping,
+                                          contact_rounds=0)
 
     def iterate(self, state: State, scratch: State, control: Control, dt: float) -> None:
         """One iteration from ``state`` into ``scratch`` (swap after)."""

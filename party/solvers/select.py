@@ -43,15 +43,15 @@ def check_solver(name: str) -> str:
 
 
 def make_solver(name: str, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
-                air: Air | None = None, iterations: int | None = None):
+                air: Air | None = None, iterations: int | None = None, contact_rounds: int | None = None):
     """The solver ``name`` (see :data:`SOLVERS`) for ``model``: the explicit one with the
     paper's Collision(), the implicit one with :func:`large_step_collision`. ``iterations``:
-    the implicit solver's sweeps per step (None: its default)."""
+    the implicit solver's sweeps per step, ``contact_rounds`` its contact re-solves (None:
+    its defaults)."""
+    implicit_only = {"iterations": iterations, "contact_rounds": contact_rounds}
+    given = {key: value for key, value in implicit_only.items() if value is not None}
     if check_solver(name) == "explicit":
-        if iterations is not None:
-            raise InvalidInput("iterations apply to the implicit solver only")
+        if given:
+            raise InvalidInput(f"{', '.join(given)} apply to the implicit solver only")
         return SolverExplicit(model, collision=collision, air=air)
-    collision = large_step_collision(collision)
-    if iterations is None:
-        return SolverImplicit(model, collision=collision, air=air)
-    return SolverImplicit(model, collision=collision, air=air, iterations=iterations)
+    return SolverImplicit(model, collision=large_step_collision(collision), air=air, **given)

@@ -18,6 +18,8 @@ from .explicit.kernels import (PlasticLimit, advance_positions, cap_speed, next_
 from .hysteresis import BendingHysteresis
 from .limit_worklists import limit_worklists, plastic_limit_worklists
 
+wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
+
 PLASTIC_TOLERANCE = 5.0e-5
 """Relative length beyond the plastic limit left to the next step's sweeps (0.005 %)."""
 PLASTIC_SKIPS_UNCHANGED = True

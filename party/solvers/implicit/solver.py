@@ -95,11 +95,15 @@ class SolverImplicit:
             over-relaxed by :data:`~party.solvers.step_end.PLASTIC_OVER_RELAXATION`.
         kinetic_damping: ``(max_speed [m/s], keep [-])`` to filter v* for static relaxation
             (:mod:`party.solvers.relax`); None for dynamics.
+        contact_rounds: Re-solves of the cloth around the nodes Collision() stopped, per
+            (sub)step (:meth:`resolve_contacts`); 0 for none. Runs that seek only a rest shape
+            (static relaxation, :func:`~party.solvers.settle.settle`) take none.
     """
 
     def __init__(self, model: Model, *, iterations: int = 10, chebyshev: float = 0.9,
                  collision: CollisionSettings | None = CollisionSettings(), air: Air | None = None,
-                 plastic_passes: int = 32, kinetic_damping: tuple[float, float] | None = None) -> None:
+                 plastic_passes: int = 32, kinetic_damping: tuple[float, float] | None = None,
+                 contact_rounds: int = CONTACT_ROUNDS) -> None:
         if iterations < 1:
             raise InvalidInput(f"implicit solver needs at least 1 iteration, got {iterations}")
         self.model = model
@@ -110,8 +114,8 @@ class SolverImplicit:
         self.end = StepEnd(model, collision, plastic_passes, limit_after_contact=True,
                            max_speed=kinetic_damping[0] if kinetic_damping is not None else None,
                            plastic_over_relaxation=PLASTIC_OVER_RELAXATION,
-                           contact_resolve=self.resolve_contacts if kinetic_damping is None else None,
-                           contact_rounds=CONTACT_ROUNDS)
+                           contact_resolve=self.resolve_contacts if contact_rounds > 0 else None,
+                           contact_rounds=contact_rounds)
         self.collision = self.end.collision
         self.air = AirForces(model, air) if air is not None else None
         dev = model.device
