@@ -178,13 +178,14 @@ def chebyshev_blend(x: wp.array(dtype=wp.vec3), previous: wp.array(dtype=wp.vec3
 @wp.kernel
 def contact_changes(x_before: wp.array(dtype=wp.vec3), v_before: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3),
                     v: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), node_length: wp.array(dtype=float),
-                    dt: float, reach: float, held: wp.array(dtype=int), source: wp.array(dtype=int),
-                    sources: wp.array(dtype=int)):
+                    body_face: wp.array(dtype=int), dt: float, reach: float, held: wp.array(dtype=int),
+                    source: wp.array(dtype=int), sources: wp.array(dtype=int)):
     """What the last Collision() did to each node (its start position and velocity were
     ``x_before``, ``v_before``): a node it changed at all is ``held`` from then on within the
-    step (flags are only set here), and one whose end of step it moved farther than ``reach``
-    times the node's shortest edge (``node_length`` [m]) is a ``source``, counted in
-    ``sources``."""
+    step (flags are only set here), and one off the body (``body_face`` -1) whose end of step
+    it moved farther than ``reach`` times the node's shortest edge (``node_length`` [m]) is a
+    ``source``, counted in ``sources``. A node on the body is left out: its body plane is in
+    the solve already, and what Collision() changes there is mostly friction's slow slip."""
     i = wp.tid()
     source[i] = 0
     if inv_mass[i] == 0.0:
@@ -193,40 +194,65 @@ def contact_changes(x_before: wp.array(dtype=wp.vec3), v_before: wp.array(dtype=
     moved = (x[i] - x_before[i]) + (v[i] - v_before[i]) * dt
     if wp.length_sq(moved) > 0.0 or wp.length_sq(v[i] - v_before[i]) > 0.0:
         held[i] = 1
-    if wp.length(moved) > reach * node_length[i]:
+    if body_face[i] < 0 and wp.length(moved) > reach * node_length[i]:
         source[i] = 1
         wp.atomic_add(sources, 0, 1)
 
 
 @wp.kernel
-def spread_flags(offsets: wp.array(dtype=int), neighbours: wp.array(dtype=int), flags: wp.array(dtype=int),
-                 spread: wp.array(dtype=int)):
-    """``spread`` = ``flags`` grown by one ring of neighbours."""
-    i = wp.tid()
-    spread[i] = flags[i]
-    if flags[i] != 0:
-        return
-    for j in range(offsets[i], offsets[i + 1]):
-        if flags[neighbours[j]] != 0:
-            spread[i] = 1
-            return
+def contact_region(offsets: wp.array(dtype=int), neighbours: wp.array(dtype=int), source: wp.array(dtype=int),
+                   held: wp.array(dtype=int), rings: int, color_offsets: wp.array(dtype=int),
+                   colored: wp.array(dtype=int), depth: wp.array(dtype=int), queue: wp.array(dtype=int),
+                   resolved: wp.array(dtype=int), region_offsets: wp.array(dtype=int), region: wp.array(dtype=int)):
+    """The nodes a contact re-solve moves: those within ``rings`` rings of neighbours (element and
+    bending rows, ``offsets``/``neighbours``) of a ``source`` and not ``held``, flagged in
+    ``resolved`` and listed colour by colour (of ``colored``) in ``region`` with their colour
+    offsets ``region_offsets``. One thread: a breadth-first search from the sources, whose work
+    grows with the region rather than with the net, then one pass over the colours."""
+    n = source.shape[0]
+    tail = int(0)
+    for i in range(n):
+        resolved[i] = 0
+        depth[i] = -1
+        if source[i] != 0:
+            depth[i] = 0
+            queue[tail] = i
+            tail += 1
+    head = int(0)
+    while head < tail:
+        i = queue[head]
+        head += 1
+        if held[i] == 0:
+            resolved[i] = 1
+        if depth[i] < rings:
+            for j in range(offsets[i], offsets[i + 1]):
+                k = neighbours[j]
+                if depth[k] < 0:
+                    depth[k] = depth[i] + 1
+                    queue[tail] = k
+                    tail += 1
+    count = int(0)
+    region_offsets[0] = 0
+    for c in range(color_offsets.shape[0] - 1):
+        for j in range(color_offsets[c], color_offsets[c + 1]):
+            i = colored[j]
+            if resolved[i] != 0:
+                region[count] = i
+                count += 1
+        region_offsets[c + 1] = count
 
 
 @wp.kernel
 def contact_resolve_start(x_start: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
-                          inv_mass: wp.array(dtype=float), held: wp.array(dtype=int), near: wp.array(dtype=int),
-                          dt: float, solve_inv_mass: wp.array(dtype=float), disp: wp.array(dtype=wp.vec3),
-                          resolved: wp.array(dtype=int)):
+                          inv_mass: wp.array(dtype=float), resolved: wp.array(dtype=int), dt: float,
+                          solve_inv_mass: wp.array(dtype=float), disp: wp.array(dtype=wp.vec3)):
     """The re-solve's start: every node's displacement over the step as the state has it,
-    x + v dt - x(t) [m], and the nodes it moves (``resolved``: ``near`` a source and not
-    ``held``), the others given no inverse mass (``solve_inv_mass``) so that the sweeps
-    leave them."""
+    x + v dt - x(t) [m]; the nodes it does not move (not ``resolved``) are given no inverse
+    mass (``solve_inv_mass``), so that sweeps over every node leave them."""
     i = wp.tid()
     disp[i] = x[i] + v[i] * dt - x_start[i]
-    resolved[i] = 0
     solve_inv_mass[i] = 0.0
-    if near[i] != 0 and held[i] == 0:
-        resolved[i] = 1
+    if resolved[i] != 0:
         solve_inv_mass[i] = inv_mass[i]
 
 
@@ -239,19 +265,3 @@ def contact_resolved_velocity(x_start: wp.array(dtype=wp.vec3), x: wp.array(dtyp
     i = wp.tid()
     if resolved[i] != 0:
         v[i] = (x_start[i] + disp[i] - x[i]) / dt
-
-
-@wp.kernel
-def compact_by_colour(color_offsets: wp.array(dtype=int), colored: wp.array(dtype=int), chosen: wp.array(dtype=int),
-                      offsets: wp.array(dtype=int), nodes: wp.array(dtype=int)):
-    """The ``chosen`` nodes of ``colored``, colour by colour, into ``nodes`` with their colour
-    offsets ``offsets`` (one thread: a serial pass, cheap beside the sweeps it spares)."""
-    count = int(0)
-    offsets[0] = 0
-    for c in range(color_offsets.shape[0] - 1):
-        for j in range(color_offsets[c], color_offsets[c + 1]):
-            i = colored[j]
-            if chosen[i] != 0:
-                nodes[count] = i
-                count += 1
-        offsets[c + 1] = count
