@@ -282,8 +282,9 @@ class SolverImplicit:
 
         ``party run dress --solver implicit`` (1/300 s): the largest elongation over its frames
         is 1.22 instead of 1.52, in its last frame 1.106 instead of 1.52, and its frames hold 6
-        elements beyond 1.12 times rest in all instead of 319 (the explicit solver: 1.106, none). A 64 x 64 sheet dropped on a sphere
-        with self-collision costs about as before, a 100 x 100 one some 10 % more."""
+        elements beyond 1.12 times rest in all instead of 319 (the explicit solver: 1.106,
+        none). A 64 x 64 sheet dropped on a sphere with self-collision costs about as before, a
+        100 x 100 one some 10 % more."""
         m = self.model
         dev = m.device
         if not self.collision.has_cloth:
