@@ -243,6 +243,25 @@ def contact_region(offsets: wp.array(dtype=int), neighbours: wp.array(dtype=int)
 
 
 @wp.kernel
+def spread_region(offsets: wp.array(dtype=int), neighbours: wp.array(dtype=int), flags: wp.array(dtype=int),
+                  held: wp.array(dtype=int), spread: wp.array(dtype=int), resolved: wp.array(dtype=int)):
+    """One ring of :func:`contact_region`'s search, a thread per node (for a GPU): ``spread`` is
+    ``flags`` grown by one ring of neighbours, and ``resolved`` flags those of its nodes not
+    ``held``. Launched ring after ring, it flags what the search does."""
+    i = wp.tid()
+    reached = flags[i]
+    if reached == 0:
+        for j in range(offsets[i], offsets[i + 1]):
+            if flags[neighbours[j]] != 0:
+                reached = 1
+                break
+    spread[i] = reached
+    resolved[i] = 0
+    if reached != 0 and held[i] == 0:
+        resolved[i] = 1
+
+
+@wp.kernel
 def contact_resolve_start(x_start: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
                           inv_mass: wp.array(dtype=float), resolved: wp.array(dtype=int), dt: float,
                           solve_inv_mass: wp.array(dtype=float), disp: wp.array(dtype=wp.vec3)):

@@ -21,7 +21,8 @@ from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
 from .descent import DESCENT, DescentTerms
 from ...collision.landing import shortest_edge
 from .kernels import (body_planes, chebyshev_blend, contact_changes, contact_region, contact_resolve_start,
-                      contact_resolved_velocity, inertial_target, onto_planes, record_correction, step_velocity)
+                      contact_resolved_velocity, inertial_target, onto_planes, record_correction, spread_region,
+                      step_velocity)
 
 
 SLIDER_STEP_RATIO = 600.0
@@ -166,6 +167,7 @@ class SolverImplicit:
         self._contact_terms.inv_mass = self._contact_inv_mass
         self._node_length = wp.array(shortest_edge(model).astype(np.float32), dtype=float, device=dev)
         self._held = wp.zeros(n, dtype=int, device=dev)
+        self.serial_region = wp.get_device(dev).is_cpu
         self._source = wp.zeros(n, dtype=int, device=dev)
         self._depth = wp.zeros(n, dtype=int, device=dev)
         self._queue = wp.zeros(n, dtype=int, device=dev)
@@ -277,8 +279,11 @@ class SolverImplicit:
         edge take :data:`CONTACT_SWEEPS` sweeps of the same implicit step from where they are,
         so that they follow the held nodes within the step. Returns the nodes re-solved
         (None where none was moved so far, or the model has no cloth collision; reads one
-        number from the device). On the CPU the sweeps visit the re-solved nodes alone, listed
-        by a breadth-first search from the moved ones (:func:`~.kernels.contact_region`).
+        number from the device). On the CPU (``serial_region``) the sweeps visit the re-solved
+        nodes alone, listed by a breadth-first search from the moved ones on one thread
+        (:func:`~.kernels.contact_region`); on a GPU the region grows ring by ring, a thread per
+        node (:func:`~.kernels.spread_region`), and the sweeps run over every node, those out
+        of it held (the same result, bit for bit).
 
         ``party run dress --solver implicit`` (1/300 s): the largest elongation over its frames
         is 1.22 instead of 1.52, in its last frame 1.106 instead of 1.52, and its frames hold 6
@@ -297,18 +302,26 @@ class SolverImplicit:
                        self._body_face, dt, CONTACT_REACH, self._held, self._source, self._sources], device=dev)
         if int(self._sources.numpy()[0]) == 0:
             return None
-        launch(contact_region, dim=1,
-               inputs=[self._neighbour_offsets, self._neighbour_nodes, self._source, self._held, CONTACT_RINGS,
-                       self._color_offsets, self._colored, self._depth, self._queue, self._resolved,
-                       self._contact_offsets, self._contact_nodes], device=dev)
+        if self.serial_region:  # one CPU thread searches, and the sweeps visit only what it found
+            launch(contact_region, dim=1,
+                   inputs=[self._neighbour_offsets, self._neighbour_nodes, self._source, self._held, CONTACT_RINGS,
+                           self._color_offsets, self._colored, self._depth, self._queue, self._resolved,
+                           self._contact_offsets, self._contact_nodes], device=dev)
+        else:  # a thread per node, ring after ring; the sweeps run over every node
+            buffers = (self._depth, self._queue)
+            for ring in range(CONTACT_RINGS):
+                launch(spread_region, dim=m.node_count,
+                       inputs=[self._neighbour_offsets, self._neighbour_nodes,
+                               self._source if ring == 0 else buffers[(ring - 1) % 2], self._held, buffers[ring % 2],
+                               self._resolved], device=dev)
         launch(contact_resolve_start, dim=m.node_count,
                inputs=[state_in.node_q, state_out.node_q, state_out.node_qd, m.node_inv_mass, self._resolved, dt,
                        self._contact_inv_mass, self._d], device=dev)
-        if wp.get_device(dev).is_cpu:  # CPU threads sweep only the re-solved nodes
+        if self.serial_region:
             launch_workers(self._descent.sweep_workers, self.workers, self._sync,
                            [CONTACT_SWEEPS, self._contact_offsets, self._no_omegas, self._contact_nodes,
                             self._contact_terms, state_in.node_q, dt, self._d, self._d_previous, self._d_before], dev)
-        else:  # a GPU thread per node of each colour; the others have no inverse mass here and stay
+        else:  # the nodes out of the region have no inverse mass here and stay
             offsets = self.color_offsets
             for _ in range(CONTACT_SWEEPS):
                 for c in range(len(offsets) - 1):
