@@ -26,15 +26,15 @@ PLASTIC_SKIPS_UNCHANGED = True
 """Sweeps of the plastic limit after the first leave out the elements whose nodes no correction
 has changed since the last sweep began (:func:`~party.solvers.explicit.kernels.plastic_limit`);
 False sweeps every element every time, to the same result bit for bit."""
+PLASTIC_OVER_RELAXATION = 1.7
+"""Over-relaxation of the plastic limit's sweeps for large steps and static relaxation (see
+:class:`StepEnd`)."""
+
 ContactResolve = Callable[[State, State, wp.array, wp.array, float, bool], "wp.array | None"]
 """``resolve(state_in, state_out, x_before, v_before, dt, first)``: after a Collision() that
 found ``state_out``'s start positions and velocities at ``x_before`` and ``v_before`` (the
 step's first Collision() where ``first``), change ``state_out``'s velocities in place; return
 an int array flagging the nodes it changed, or None where it changed none."""
-
-PLASTIC_OVER_RELAXATION = 1.7
-"""Over-relaxation of the plastic limit's sweeps for large steps and static relaxation (see
-:class:`StepEnd`)."""
 
 
 class StepEnd:
@@ -84,8 +84,8 @@ class StepEnd:
             (:data:`ContactResolve`): the implicit solver solves again there for the cloth
             around the nodes Collision() stopped. The plastic limit and Collision() follow each
             call, so that Collision() keeps the last word.
-        contact_rounds: Calls of ``contact_resolve`` a step; with it, a step runs Collision()
-            once more than this.
+        contact_rounds: Most calls of ``contact_resolve`` a step, each followed by the limit
+            and Collision(); the rounds stop once a call changes nothing.
     """
 
     def __init__(self, model: Model, collision: CollisionSettings | None, plastic_passes: int,
@@ -131,10 +131,8 @@ class StepEnd:
         for round_ in range(self.contact_rounds if resolving else int(self.limit_after_contact)):
             resolved = self.contact_resolve(state_in, state_out, self._x_before, self._v_before, dt,
                                             round_ == 0) if resolving else None
-            if round_ > 0 and resolved is None:
-                break  # the last Collision() moved no node's end: it stands
-            if resolved is None and not self.limit_after_contact:
-                break
+            if resolved is None and (round_ > 0 or not self.limit_after_contact):
+                break  # the last Collision() stands: it moved no node's end enough for a round
             if self._has_limit:
                 self._apply_plastic_limit(state_out, dt, over_relaxation=1.0)
             else:

@@ -10,6 +10,7 @@ import numpy as np
 import warp as wp
 
 from ...collision import CollisionSettings
+from ...collision.landing import shortest_edge
 from ...errors import InvalidInput
 from ...launch import launch, launch_items, launch_workers, worker_count, worker_sync
 from ...model import Control, Model, State
@@ -19,7 +20,6 @@ from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
 from .descent import DESCENT, DescentTerms
-from ...collision.landing import shortest_edge
 from .kernels import (body_planes, chebyshev_blend, contact_changes, contact_region, contact_resolve_start,
                       contact_resolved_velocity, inertial_target, onto_planes, record_correction, spread_region,
                       step_velocity)
@@ -53,11 +53,11 @@ CONTACT_ROUNDS = 3
 """Most times a (sub)step solves again around the nodes Collision() stopped
 (:meth:`SolverImplicit.resolve_contacts`; the default of ``contact_rounds``). The implicit
 dress's frames at 1/250 to 1/400 s had 4 to 49 elements beyond 1.12 times rest in all with
-three rounds, against 106 to 435 with none (``out/scratch/resolve_vars.py``); two rounds
-left 15 to 163, one round about twice that."""
+three rounds, against 106 to 435 with none (``out/scratch/resolve_vars.py``), and two rounds
+15 to 163."""
 
 CONTACT_SWEEPS = 5
-"""Sweeps of each re-solve (10 did no better on the dress)."""
+"""Sweeps of each re-solve (10 did no better on the dress, in one run of each)."""
 
 CONTACT_REACH = 0.01
 """A node off the body whose end of step Collision() moved farther than this share of its
