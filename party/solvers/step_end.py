@@ -85,7 +85,8 @@ class StepEnd:
             around the nodes Collision() stopped. The plastic limit and Collision() follow each
             call, so that Collision() keeps the last word.
         contact_rounds: Most calls of ``contact_resolve`` a step, each followed by the limit
-            and Collision(); the rounds stop once a call changes nothing.
+            and Collision(). A call that changes nothing ends the rounds, but for the first,
+            whose limit and Collision() run anyway with ``limit_after_contact``.
     """
 
     def __init__(self, model: Model, collision: CollisionSettings | None, plastic_passes: int,
