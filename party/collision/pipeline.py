@@ -136,12 +136,14 @@ class CollisionPipeline:
         self._most = wp.ones(1, dtype=int, device=dev)
         self._body_speed = wp.zeros(1, dtype=float, device=dev)
         self._thickness = float(model.node_thickness.numpy().max())
+        if self.bvh:
+            # each node's shortest edge [m], for the landing substeps and the implicit solver's re-solve
+            self.node_length = wp.array(shortest_edge(model).astype(np.float32), dtype=float, device=dev)
         if self.has_body:
             colliders = model.host["colliders"]
             size = max(_triangle_size(c.vertices, c.faces) for c in colliders)
             if self.bvh:
                 self.body_tree = TriangleBvh(model.collider_faces)
-                self._node_length = wp.array(shortest_edge(model).astype(np.float32), dtype=float, device=dev)
             else:
                 self.body_lists = AxisIntervalLists(model.collider_faces, min_cell=size, max_cells=settings.max_cells)
             self.body_faces = wp.zeros((n, MAX_FACES), dtype=int, device=dev)
@@ -286,7 +288,7 @@ class CollisionPipeline:
                    device=m.device)
         self._most.fill_(1)
         launch(landing_substeps, dim=m.node_count,
-               inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self._node_length,
+               inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self.node_length,
                        self.body_tree.id, m.collider_faces, state.collider_qd, self._body_speed, m.gravity, dt,
                        self.margin, LANDING_REACH, self._most], device=m.device)
         needed = int(self._most.numpy()[0])

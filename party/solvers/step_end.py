@@ -81,9 +81,9 @@ class StepEnd:
             elements at four times their length; the limit moved their nodes 150 mm in one
             step, beyond the collision search, and 36 of them ended inside the shoulders.)
         contact_resolve: Called after every Collision() of a step but its last
-            (:data:`ContactResolve`): the implicit solver solves again there for the cloth
-            around the nodes Collision() stopped. The plastic limit and Collision() follow each
-            call, so that Collision() keeps the last word.
+            (:data:`ContactResolve`; only with cloth collision): the implicit solver solves
+            again there for the cloth around the nodes Collision() stopped. The plastic limit
+            and Collision() follow each call, so that Collision() keeps the last word.
         contact_rounds: Most calls of ``contact_resolve`` a step, each followed by the limit
             and Collision(). A call that changes nothing ends the rounds, but for the first,
             whose limit and Collision() run anyway with ``limit_after_contact``.
@@ -109,7 +109,8 @@ class StepEnd:
         self._serial = wp.get_device(model.device).is_cpu
         self._worklists = limit_worklists(model) if self._has_limit and self._serial else None  # CPU sweeps only
         self.limit_after_contact = limit_after_contact and self._has_limit and self.collision is not None
-        self.contact_resolve = contact_resolve if self.collision is not None else None
+        # without cloth collision no Collision() stops a node against another layer
+        self.contact_resolve = contact_resolve if self.collision is not None and self.collision.has_cloth else None
         self.contact_rounds = max(int(contact_rounds), 1)
         if self.contact_resolve is not None:
             self._x_before = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)

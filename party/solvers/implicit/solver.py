@@ -10,7 +10,6 @@ import numpy as np
 import warp as wp
 
 from ...collision import CollisionSettings
-from ...collision.landing import shortest_edge
 from ...errors import InvalidInput
 from ...launch import launch, launch_items, launch_workers, worker_count, worker_sync
 from ...model import Control, Model, State
@@ -165,7 +164,6 @@ class SolverImplicit:
         self._contact_inv_mass = wp.zeros(n, dtype=float, device=dev)
         self._contact_terms = self._descent_terms()
         self._contact_terms.inv_mass = self._contact_inv_mass
-        self._node_length = wp.array(shortest_edge(model).astype(np.float32), dtype=float, device=dev)
         self._held = wp.zeros(n, dtype=int, device=dev)
         self.serial_region = wp.get_device(dev).is_cpu
         self._source = wp.zeros(n, dtype=int, device=dev)
@@ -278,9 +276,10 @@ class SolverImplicit:
         of one whose end of step it moved farther than :data:`CONTACT_REACH` of its shortest
         edge take :data:`CONTACT_SWEEPS` sweeps of the same implicit step from where they are,
         so that they follow the held nodes within the step. Returns the nodes re-solved
-        (None where none was moved so far, or the model has no cloth collision; reads one
-        number from the device). On the CPU (``serial_region``) the sweeps visit the re-solved
-        nodes alone, listed by a breadth-first search from the moved ones on one thread
+        (None where none was moved so far; reads one number from the device). Called only
+        where the model has cloth collision (:class:`~party.solvers.step_end.StepEnd`). On the
+        CPU (``serial_region``) the sweeps visit the re-solved nodes alone, listed by a
+        breadth-first search from the moved ones on one thread
         (:func:`~.kernels.contact_region`); on a GPU the region grows ring by ring, a thread per
         node (:func:`~.kernels.spread_region`), and the sweeps run over every node, those out
         of it held (the same result, bit for bit).
@@ -292,14 +291,13 @@ class SolverImplicit:
         100 x 100 one some 10 % more."""
         m = self.model
         dev = m.device
-        if not self.collision.has_cloth:
-            return None
         if first:
             self._held.zero_()
         self._sources.zero_()
         launch(contact_changes, dim=m.node_count,
-               inputs=[x_before, v_before, state_out.node_q, state_out.node_qd, m.node_inv_mass, self._node_length,
-                       self._body_face, dt, CONTACT_REACH, self._held, self._source, self._sources], device=dev)
+               inputs=[x_before, v_before, state_out.node_q, state_out.node_qd, m.node_inv_mass,
+                       self.collision.node_length, self._body_face, dt, CONTACT_REACH, self._held, self._source,
+                       self._sources], device=dev)
         if int(self._sources.numpy()[0]) == 0:
             return None
         if self.serial_region:  # one CPU thread searches, and the sweeps visit only what it found
