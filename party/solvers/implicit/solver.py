@@ -51,8 +51,8 @@ MAX_SWEEPS = 100
 CONTACT_ROUNDS = 3
 """Most times a (sub)step solves again around the nodes Collision() stopped
 (:meth:`SolverImplicit.resolve_contacts`; the default of ``contact_rounds``). The implicit
-dress's frames at 1/250 to 1/400 s had 4 to 49 elements beyond 1.12 times rest in all with
-three rounds, against 106 to 435 with none (``out/scratch/resolve_vars.py``), and two rounds
+dress's frames at steps from 1/250 to 1/400 s had 4 to 49 elements beyond 1.12 times rest in all
+with three rounds, against 106 to 435 with none (``out/scratch/resolve_vars.py``), and two rounds
 15 to 163."""
 
 CONTACT_SWEEPS = 5
@@ -285,8 +285,8 @@ class SolverImplicit:
         of it held (the same result, bit for bit).
 
         ``party run dress --solver implicit`` (1/300 s): the largest elongation over its frames
-        is 1.22 instead of 1.52, in its last frame 1.106 instead of 1.52, and its frames hold 6
-        elements beyond 1.12 times rest in all instead of 319 (the explicit solver: 1.106,
+        is 1.21 instead of 1.77, in its last frame 1.106 instead of 1.50, and its frames hold 43
+        elements beyond 1.12 times rest in all instead of 413 (the explicit solver: 1.106,
         none). A 64 x 64 sheet dropped on a sphere with self-collision costs about as before, a
         100 x 100 one some 10 % more."""
         m = self.model
