@@ -308,7 +308,7 @@ def test_guard_and_collision_give_the_same_on_one_thread_and_on_several(monkeypa
     assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][2], runs[1][2])
 
 
-@pytest.mark.parametrize("room,hot_share,reach", [(1, 0.01, 8e-3), (16, 0.01, 8e-3), (16, 1.0, 2e-3)])
+@pytest.mark.parametrize("room,hot_share,reach", [(1, 0.01, 8e-3), (16, 0.01, 8e-3), (16, 0.1, 8e-3), (16, 1.0, 2e-3)])
 def test_crossing_guard_testing_listed_triangles_finds_what_a_search_at_every_check_finds(monkeypatch, room,
                                                                                          hot_share, reach):
     """The guard tests each edge against the triangles listed near it, and the edges and
