@@ -127,6 +127,10 @@ def drape_command(
         out.print(f"[yellow]tight: sewn up to {summary['max_sewn_elongation']:.2f} times rest length, beyond "
                   f"{the_fabric.name}'s limit of {1.0 + the_fabric.strain_limit:.2f}, where the pattern is smaller "
                   "than this body or its sewing had not settled; the cloth keeps that stretch[/]")
+    if summary["elements_beyond_limit"]:
+        out.print(f"[yellow]stretched: {summary['elements_beyond_limit']} elements ended more than 2 % beyond their "
+                  f"plastic limit (up to {summary['max_elongation']:.2f} times rest length), held there by the "
+                  "collision response or the crossing guard[/]")
     if summary["max_seam_gap_mm"] > OPEN_SEAM_MM:
         seam, gap = max(summary["seam_gaps_mm"].items(), key=lambda item: item[1])
         out.print(f"[yellow]open seam: {seam} was still {gap:.1f} mm apart when the sewing stopped, and the garment "

@@ -301,3 +301,15 @@ def test_plastic_over_relaxation_outside_one_to_two_is_refused():
     model, _ = hanging_chain(0.1)
     with pytest.raises(InvalidInput, match=r"plastic over-relaxation must be in \[1, 2\), got 2.0"):
         StepEnd(model, None, plastic_passes=8, plastic_over_relaxation=2.0)
+
+
+def test_elements_beyond_limit_counts_what_the_limit_has_not_taken_back():
+    """An element counts once it is more than 2 % longer than its plastic limit (which, for a
+    sewn garment, is its sewn length where that was longer); an element without a limit never."""
+    from party.output.metrics import elements_beyond_limit
+
+    points = np.array([[0, 0, 0], [1.03, 0, 0], [0, 1.01, 0], [0, 0, 10.0]], float)
+    elements = np.array([[0, 1], [0, 2], [0, 3]])
+    assert elements_beyond_limit(points, elements, np.array([1.0, 1.0, np.inf])) == 1
+    assert elements_beyond_limit(points, elements, np.array([1.0, 1.0, np.inf]), tolerance=0.005) == 2
+    assert elements_beyond_limit(points, elements, np.array([1.02, 1.0, 9.0])) == 1

@@ -46,7 +46,7 @@ from ..fabric import Fabric
 from ..garment.assemble import assemble
 from ..output.frames import write_json, write_mesh
 from ..output.garment_export import write_garment
-from ..output.metrics import body_vertices_through, cloth_crossings, max_elongation
+from ..output.metrics import body_vertices_through, cloth_crossings, elements_beyond_limit, max_elongation
 from ..pattern import load_pattern
 from ..model import Model, State
 from ..solvers.relax import RelaxResult, SolverRelax, total_energy
@@ -144,6 +144,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
                                                              device=model.device),
         "max_elongation": max_elongation(points, host["elements"], host["element_params"][:, 0], limited),
         "max_sewn_elongation": max_elongation(sewn.points, host["elements"], host["element_params"][:, 0], limited),
+        "elements_beyond_limit": elements_beyond_limit(points, host["elements"], model.element_max_length.numpy()),
         "relaxation": {
             "sewing_iterations": sewn.relaxation.iterations + sewn.settling.iterations, "draping_steps": draped.steps,
             "draping_seconds": round(draped.seconds, 3), "at_rest": draped.at_rest,
