@@ -297,7 +297,8 @@ def run_drape(pattern: Path, body: str, solver: str, spacing: float) -> dict:
            "nodes": summary["nodes"], "draping_steps": summary["relaxation"]["draping_steps"],
            "max_seam_gap_mm": summary["max_seam_gap_mm"], "body_penetrations": summary["body_penetrations"],
            "body_vertices_through_cloth": summary["body_vertices_through_cloth"],
-           "cloth_crossings": summary["cloth_crossings"], "max_elongation": summary["max_elongation"]}
+           "cloth_crossings": summary["cloth_crossings"], "max_elongation": summary["max_elongation"],
+           "elements_beyond_limit": summary["elements_beyond_limit"]}
     if Path(pattern) == FLARE:
         row["ratio_to_garmentcode"] = GARMENTCODE_SECONDS / summary["wall_seconds"]
     return row
@@ -334,6 +335,8 @@ def describe(row: dict) -> str:
                 f"seam gap {row['max_seam_gap_mm']:.1f} mm, "
                 f"penetrations {row['body_penetrations']} (body vertices through {row['body_vertices_through_cloth']}), "
                 f"crossings {row['cloth_crossings']}, elongation {row['max_elongation']:.3f}"
+                + (f" ({row['elements_beyond_limit']} elements beyond their limit)"
+                   if row.get("elements_beyond_limit") else "")
                 + (f", {row['ratio_to_garmentcode']:.1f}x GarmentCode's {GARMENTCODE_SECONDS:,.0f} s for its "
                    f"{GARMENTCODE_VERTICES:,} vertices" if "ratio_to_garmentcode" in row else ""))
     return (f"{seconds_text(row, 'wall_per_simulated_second')} s per simulated s "
