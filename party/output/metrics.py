@@ -139,8 +139,8 @@ def max_elongation(points: np.ndarray, elements: np.ndarray, rest_length: np.nda
 def elements_beyond_limit(points: np.ndarray, elements: np.ndarray, max_length: np.ndarray,
                           tolerance: float = 0.02) -> int:
     """Number of elements longer than ``1 + tolerance`` times their plastic limit ``max_length``
-    [m] (``Model.element_max_length``: infinite where an element has none, and for a sewn garment
-    never shorter than its sewn length): the stretch the plastic limit has not taken back."""
+    [m] (``Model.element_max_length``: 1e30 where an element has none, and for a sewn garment never
+    shorter than its sewn length): the stretch the plastic limit has not taken back."""
     if len(elements) == 0:
         return 0
     length = np.linalg.norm(points[elements[:, 1]] - points[elements[:, 0]], axis=1)
