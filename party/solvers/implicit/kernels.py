@@ -207,8 +207,8 @@ def contact_region(offsets: wp.array(dtype=int), neighbours: wp.array(dtype=int)
     """The nodes a contact re-solve moves: those within ``rings`` rings of neighbours (element and
     bending rows, ``offsets``/``neighbours``) of a ``source`` and not ``held``, flagged in
     ``resolved`` and listed colour by colour (of ``colored``) in ``region`` with their colour
-    offsets ``region_offsets``. One thread: a breadth-first search from the sources, whose work
-    grows with the region rather than with the net, then one pass over the colours."""
+    offsets ``region_offsets``. One thread: the flags reset, a breadth-first search from the
+    sources (its work grows with the region, not with the net), then one pass over the colours."""
     n = source.shape[0]
     tail = int(0)
     for i in range(n):

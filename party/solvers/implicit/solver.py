@@ -320,11 +320,7 @@ class SolverImplicit:
                            [CONTACT_SWEEPS, self._contact_offsets, self._no_omegas, self._contact_nodes,
                             self._contact_terms, state_in.node_q, dt, self._d, self._d_previous, self._d_before], dev)
         else:  # the nodes out of the region have no inverse mass here and stay
-            offsets = self.color_offsets
-            for _ in range(CONTACT_SWEEPS):
-                for c in range(len(offsets) - 1):
-                    launch(self._descent.block_descent, offsets[c + 1] - offsets[c],
-                           [offsets[c], self._colored, self._contact_terms, state_in.node_q, dt, self._d], device=dev)
+            self._sweep_by_colour(state_in.node_q, dt, self._contact_terms, CONTACT_SWEEPS, np.zeros(0))
         launch(contact_resolved_velocity, dim=m.node_count,
                inputs=[state_in.node_q, state_out.node_q, self._d, self._resolved, dt, state_out.node_qd], device=dev)
         return self._resolved
@@ -356,7 +352,7 @@ class SolverImplicit:
                            [self.sweeps(dt), self._color_offsets, self._omegas(dt)[1], self._colored, self._terms,
                             state_in.node_q, dt, self._d, self._d_previous, self._d_before], dev)
         else:
-            self._sweep_by_colour(state_in.node_q, dt)
+            self._sweep_by_colour(state_in.node_q, dt, self._terms, self.sweeps(dt), self._omegas(dt)[0])
         if self._planes:
             launch(onto_planes, dim=m.node_count, inputs=[self._terms, state_in.node_q, self._d], device=dev)
             launch(self._descent.plane_reactions, dim=m.node_count,
@@ -366,17 +362,18 @@ class SolverImplicit:
         launch(step_velocity, dim=m.node_count, inputs=[state_in.node_q, self._d, dt],
                outputs=[state_out.node_q, state_out.node_qd], device=dev)
 
-    def _sweep_by_colour(self, x_start: wp.array, dt: float) -> None:
-        """The sweeps as one launch per colour and one per Chebyshev blend (on one CPU thread,
-        recorded into the solve's graph, or on CUDA; several CPU threads take
-        ``sweep_workers`` of :mod:`.descent` instead)."""
+    def _sweep_by_colour(self, x_start: wp.array, dt: float, terms: DescentTerms, sweeps: int,
+                         omegas: np.ndarray) -> None:
+        """``sweeps`` sweeps of the block descent on ``terms`` as one launch per colour and, with
+        Chebyshev's ``omegas`` (none where empty), one per blend (on one CPU thread, recorded
+        into the solve's graph, or on CUDA; several CPU threads take ``sweep_workers`` of
+        :mod:`.descent` instead)."""
         offsets = self.color_offsets
-        omegas = self._omegas(dt)[0]
         dev = self.model.device
-        for iteration in range(self.sweeps(dt)):
+        for iteration in range(sweeps):
             for c in range(len(offsets) - 1):
                 launch(self._descent.block_descent, offsets[c + 1] - offsets[c],
-                       [offsets[c], self._colored, self._terms, x_start, dt, self._d], device=dev)
+                       [offsets[c], self._colored, terms, x_start, dt, self._d], device=dev)
             if len(omegas) == 0:
                 continue
             if iteration == 0:
