@@ -55,7 +55,8 @@ def run_command(
     solver: Optional[str] = typer.Option(None, "--solver", help="explicit (the paper's, the reference) or implicit (large steps)."),
     fabric: Optional[str] = typer.Option(None, "--fabric", help="Fabric: a library name (see `party fabrics`) or a .toml/.json file."),
     quick: bool = typer.Option(False, "--quick", help="Coarse and short: a fast check (CI)."),
-    resume: bool = typer.Option(False, "--resume", help="Continue from OUT/checkpoint.npz."),
+    resume: bool = typer.Option(False, "--resume",
+                                help="Continue from OUT/checkpoint.npz (the dress: and its sewing from OUT/sewn.npz)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
 ) -> None:
     """Run a scene and write its frames, images and summary.json."""
@@ -80,7 +81,8 @@ def run_command(
     for name, value in options.items():
         if value is not None and value is not False and name not in accepted and name != "progress":
             raise InvalidInput(f"scene {scene!r} has no option --{flags.get(name, name)}")
-    built = build(**{k: v for k, v in options.items() if v is not None and k in accepted})
+    kept = {"out": out_dir, "resume": resume} if "out" in accepted else {}  # a scene that keeps its set-up
+    built = build(**{k: v for k, v in options.items() if v is not None and k in accepted}, **kept)
     summary = run_scene(built, out_dir, resume=resume, progress=progress)
     out.print(f"{scene}: {summary['nodes']} nodes, {summary['steps']} steps, {summary['simulated_seconds']:.3f} s "
               f"simulated in {summary['wall_seconds']:.1f} s; max elongation {summary['max_elongation']:.4f}, "

@@ -1,12 +1,17 @@
 """The paper's experiment 2 at --quick resolution, run through the command line."""
 
 import json
+import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
+import trimesh
 from PIL import Image
+
+from party.scenes import dress, garment_sim
+from party.scenes.drape_checkpoint import DrapeCheckpoint
 
 
 @pytest.fixture(scope="module")
@@ -46,3 +51,59 @@ def test_dress_pictures(dress_run):
     # the three views differ
     a, b = (np.asarray(Image.open(out / "images" / f"final_{v}.png").convert("L"), float) for v in ("front", "side"))
     assert np.abs(a - b).mean() > 5
+
+
+class Stop(Exception):
+    pass
+
+
+def test_a_resumed_dress_takes_its_sewing_from_sewn_npz(dress_run, monkeypatch):
+    """Resumed, the dress does not sew again: its model starts where the run's did (its frame 0),
+    and its summary keeps the sewing's log."""
+    out, summary = dress_run
+    monkeypatch.setattr(dress, "sew", lambda *args, **kwargs: pytest.fail("sewed again"))
+    scene = dress.build(quick=True, out=out, resume=True)
+    frame_0 = trimesh.load(out / "frames" / "frame_000000.ply", process=False).vertices
+    assert np.array_equal(scene.model.state().positions(), frame_0)
+    assert scene.summary["relaxation"] == summary["relaxation"]
+
+
+def test_a_dress_stopped_while_sewing_goes_on_from_its_last_stage(dress_run, tmp_path, monkeypatch):
+    """Stopped after its closing stage, the dress resumed does not place its panels again and
+    ends sewn where a run through did, bit for bit."""
+    out, _ = dress_run
+    save = DrapeCheckpoint.save_sewing
+
+    def save_then_stop(self, stage, wall_seconds):
+        save(self, stage, wall_seconds)
+        if stage.stage == "closed":
+            raise Stop
+
+    monkeypatch.setattr(DrapeCheckpoint, "save_sewing", save_then_stop)
+    with pytest.raises(Stop):
+        dress.build(quick=True, out=tmp_path)
+    monkeypatch.setattr(DrapeCheckpoint, "save_sewing", save)
+    monkeypatch.setattr(garment_sim, "dress", lambda *args, **kwargs: pytest.fail("placed the panels again"))
+    scene = dress.build(quick=True, out=tmp_path, resume=True)
+    frame_0 = trimesh.load(out / "frames" / "frame_000000.ply", process=False).vertices
+    assert np.array_equal(scene.model.state().positions(), frame_0)
+
+
+def test_a_finished_dress_resumed_keeps_its_summary(dress_run, tmp_path):
+    """Resuming a run that had finished takes no step and writes the same summary."""
+    out, summary = dress_run
+    copy = shutil.copytree(out, tmp_path / "copy")
+    run = subprocess.run([sys.executable, "-m", "party.cli", "run", "dress", "--quick", "--out", str(copy),
+                          "--no-progress", "--resume"], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert json.loads((copy / "summary.json").read_text()) == summary
+
+
+def test_resuming_another_dress_sewing_is_refused_in_one_line(dress_run):
+    out, _ = dress_run
+    run = subprocess.run([sys.executable, "-m", "party.cli", "run", "dress", "--quick", "--out", str(out),
+                          "--no-progress", "--resume", "--fabric", "cotton"], capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 1
+    assert run.stderr.strip() == (f"error: {out / 'sewn.npz'} belongs to another dress sewing (different fabric); "
+                                  "remove it or drop --resume")

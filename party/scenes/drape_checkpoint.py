@@ -37,11 +37,14 @@ SAVE_SECONDS = 10.0
 
 class DrapeCheckpoint:
     """The checkpoint at ``path`` of the drape asked for with ``inputs`` (a JSON-able dict:
-    pattern, body, fabric, spacing, solver, ...), which a resumed drape must match."""
+    pattern, body, fabric, spacing, solver, ...), which a resumed drape must match; ``run``
+    names what it is a checkpoint of in the errors (``party run dress`` keeps its sewing in
+    one: :mod:`.dress`)."""
 
-    def __init__(self, path: Path, inputs: dict) -> None:
+    def __init__(self, path: Path, inputs: dict, run: str = "drape") -> None:
         self.path = Path(path)
         self.inputs = json.dumps(inputs, sort_keys=True)
+        self.run = run
         self._sewn: dict = {}
         self._saved_at = -math.inf
 
@@ -54,12 +57,12 @@ class DrapeCheckpoint:
             saved = load_checkpoint(self.path)
             theirs = json.loads(str(saved["inputs"]))
         except (OSError, ValueError, KeyError) as error:
-            raise InvalidInput(f"{self.path} is not a drape checkpoint ({error}); remove it or drop --resume") from None
+            raise InvalidInput(f"{self.path} is not a {self.run} checkpoint ({error}); remove it or drop --resume") from None
         ours = json.loads(self.inputs)
         differing = sorted(k for k in ours.keys() | theirs.keys()  # as written: a NaN equals itself there
                            if json.dumps(ours.get(k), sort_keys=True) != json.dumps(theirs.get(k), sort_keys=True))
         if differing:
-            raise InvalidInput(f"{self.path} belongs to another drape (different {', '.join(differing)}); "
+            raise InvalidInput(f"{self.path} belongs to another {self.run} (different {', '.join(differing)}); "
                                "remove it or drop --resume")
         self._sewn = {k: saved[k] for k in saved if k.startswith("sewn_") or k == "wall_seconds"}
         return saved

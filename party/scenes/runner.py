@@ -82,8 +82,9 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
 
     summary = {
         "scene": scene.name, "status": "running", "nodes": model.node_count, "triangles": model.triangle_count,
-        "dt": dt, "critical_dt": critical, "device": model.device, "steps": 0, "simulated_seconds": 0.0,
-        "frames": first_frame, "parameters": scene.parameters, **scene.summary,
+        "dt": dt, "critical_dt": critical, "device": model.device,
+        **_summary_numbers(totals, first_frame - 1, steps_per_frame, dt),  # a finished run resumed takes no step
+        "parameters": scene.parameters, **scene.summary,
     }
     bar = Progress(TextColumn(f"[bold]{scene.name}[/]"), BarColumn(), TextColumn("{task.completed}/{task.total} frames"),
                    TextColumn("t={task.fields[t]:.3f} s"), TimeElapsedColumn(), TimeRemainingColumn(),
