@@ -100,6 +100,8 @@ def test_a_finished_dress_resumed_keeps_its_summary(dress_run, tmp_path):
 
 
 def test_resuming_another_dress_sewing_is_refused_in_one_line(dress_run):
+    """Resumed in another fabric, the dress refuses the sewing it kept: one line names the file
+    and what differs, exit 1."""
     out, _ = dress_run
     run = subprocess.run([sys.executable, "-m", "party.cli", "run", "dress", "--quick", "--out", str(out),
                           "--no-progress", "--resume", "--fabric", "cotton"], capture_output=True, text=True,

@@ -11,8 +11,8 @@ it the sleeves' folds let some edges through neighbouring triangles.
 
 Run with an output folder (``party run dress --out OUT``), the sewing keeps ``OUT/sewn.npz``
 as it goes (after each of its stages, and once sewn: :mod:`.drape_checkpoint`), and
-``--resume`` takes the sewn garment from there instead of sewing it again (about a third of the
-run at the default spacing), or goes on with a sewing that was stopped.
+``--resume`` takes the sewn garment from there instead of sewing it again (some 15 s at the
+default spacing), or goes on with a sewing that was stopped.
 """
 
 from __future__ import annotations
@@ -24,10 +24,11 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from ..body.body import Body
 from ..body.dress_form import dress_form
 from ..collision import CollisionSettings
 from ..fabric import Fabric, wool_flannel
-from ..garment.assemble import assemble
+from ..garment.assemble import Garment, assemble
 from ..output import render
 from ..output.frames import write_json
 from ..pattern import load_pattern
@@ -90,7 +91,8 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None
     return scene
 
 
-def _sew_keeping(checkpoint: DrapeCheckpoint, resume: bool, garment, body, fabric: Fabric, **sewing) -> Sewn:
+def _sew_keeping(checkpoint: DrapeCheckpoint, resume: bool, garment: Garment, body: Body, fabric: Fabric,
+                 **sewing) -> Sewn:
     """:func:`~.garment_sim.sew`, saving into ``checkpoint`` after each stage and once sewn;
     with ``resume``, the sewn garment it holds, or the sewing gone on from its last stage."""
     started = time.perf_counter()
