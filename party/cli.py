@@ -81,6 +81,7 @@ def run_command(
     for name, value in options.items():
         if value is not None and value is not False and name not in accepted and name != "progress":
             raise InvalidInput(f"scene {scene!r} has no option --{flags.get(name, name)}")
+    _say_if_nothing_to_resume(resume, out_dir, "the run starts from its first frame")
     kept = {"out": out_dir, "resume": resume} if "out" in accepted else {}  # a scene that keeps its set-up
     built = build(**{k: v for k, v in options.items() if v is not None and k in accepted}, **kept)
     summary = run_scene(built, out_dir, resume=resume, progress=progress)
@@ -88,6 +89,12 @@ def run_command(
               f"simulated in {summary['wall_seconds']:.1f} s; max elongation {summary['max_elongation']:.4f}, "
               f"body penetrations {summary['body_penetrations']}, cloth crossings {summary['cloth_crossings']}")
     out.print(f"results in {out_dir}/")
+
+
+def _say_if_nothing_to_resume(resume: bool, out_dir: Path, instead: str) -> None:
+    """With ``--resume``, say so where ``out_dir`` holds no checkpoint to go on from."""
+    if resume and not (out_dir / "checkpoint.npz").exists():
+        out.print(f"[yellow]nothing to resume: no checkpoint.npz in {out_dir}; {instead}[/]", highlight=False)
 
 
 @app.command("drape")
@@ -117,6 +124,7 @@ def drape_command(
     from .solvers.select import check_solver
 
     the_fabric = fabric_by_name(fabric)
+    _say_if_nothing_to_resume(resume, out_dir, "the drape starts from the beginning")
     summary = drape(pattern, body, the_fabric, out_dir, spacing=spacing_mm / 1000.0, device=device,
                     solver=check_solver(solver),
                     pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,

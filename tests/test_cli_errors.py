@@ -135,6 +135,16 @@ def test_resume_continues_where_it_stopped(tmp_path):
     assert np.allclose(a, b, atol=1e-6)
 
 
+def test_resume_with_nothing_to_resume_says_so_and_runs_from_the_start(tmp_path):
+    out = tmp_path / "o"
+    result = party("run", "sphere-drop", "--grid", "16", "--duration", "0.02", "--out", str(out), "--no-progress",
+                   "--resume")
+    assert result.returncode == 0, result.stderr
+    said = " ".join(result.stdout.split())
+    assert said.startswith(f"nothing to resume: no checkpoint.npz in {out}; the run starts from its first frame ")
+    assert json.loads((out / "summary.json").read_text())["steps"] > 0
+
+
 def test_ctrl_c_says_how_to_go_on_and_exits_130(tmp_path):
     """A run stopped by Ctrl-C (SIGINT) once it has written a checkpoint ends with one line
     saying how to go on, exit status 130, and the checkpoint kept."""
