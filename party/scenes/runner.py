@@ -32,8 +32,9 @@ MAX_SPEED = 100.0
 def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool = True) -> dict:
     """Simulate ``scene``, writing results under ``out`` as they are computed.
 
-    Returns the summary (also written to ``out/summary.json``): nodes, steps,
-    simulated_seconds, wall_seconds, max_elongation (largest length / rest length of any warp
+    Returns the summary (also written to ``out/summary.json``): nodes, steps (the scene's
+    duration in whole steps; the last output frame is shorter where the duration ends within
+    it), simulated_seconds, wall_seconds, max_elongation (largest length / rest length of any warp
     or weft element at any output frame), body_penetrations (nodes inside a collider, summed
     over output frames), cloth_crossings (crossing edge-triangle pairs, summed over output
     frames), and the scene's parameters. Raises :class:`SimulationUnstable` (frames so far
@@ -46,7 +47,11 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
         raise InvalidInput(f"time step {dt:g} s exceeds this net's explicit stability limit {critical:.3g} s; "
                            f"use --dt {_round_down(critical * 0.9):g} or a coarser --spacing")
     steps_per_frame = max(int(round(scene.frame_interval / dt)), 1)
-    frames_total = max(int(round(scene.duration / (steps_per_frame * dt))), 1)
+    steps_total = max(int(round(scene.duration / dt)), 1)
+    frames_total = -(-steps_total // steps_per_frame)  # the last frame shorter where the duration ends within it
+
+    def steps_by(frame: int) -> int:
+        return min(frame * steps_per_frame, steps_total)
     faces = model.triangles
     colliders = model.host["colliders"]
     host = model.host
@@ -83,7 +88,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     summary = {
         "scene": scene.name, "status": "running", "nodes": model.node_count, "triangles": model.triangle_count,
         "dt": dt, "critical_dt": critical, "device": model.device,
-        **_summary_numbers(totals, first_frame - 1, steps_per_frame, dt),  # a finished run resumed takes no step
+        **_summary_numbers(totals, first_frame - 1, steps_by(first_frame - 1), dt),  # a finished run resumed takes no step
         "parameters": scene.parameters, **scene.summary,
     }
     bar = Progress(TextColumn(f"[bold]{scene.name}[/]"), BarColumn(), TextColumn("{task.completed}/{task.total} frames"),
@@ -94,7 +99,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
         for frame in range(first_frame, frames_total + 1):
             start = time.perf_counter()
             try:  # a blow-up, or a step the solver refused (landing): the frames so far stand
-                for _ in range(steps_per_frame):
+                for _ in range(steps_by(frame) - steps_by(frame - 1)):
                     if scene.wind is not None:
                         control.wind = scene.wind(state.time)
                     scene.solver.step(state, scratch, control, dt)
@@ -111,29 +116,28 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
                         f"{speed:.3g} m/s); frames up to {frame - 1} are kept in {out / 'frames'}; "
                         f"try a smaller --dt, e.g. {_round_down(dt / 2):g}")
             except SimulationUnstable:
-                summary.update(_summary_numbers(totals, frame - 1, steps_per_frame, dt), status="unstable")
+                summary.update(_summary_numbers(totals, frame - 1, steps_by(frame - 1), dt), status="unstable")
                 write_json(summary_path, summary)
                 raise
             _record(out, frame, points, faces, model, probe, limited, rest, totals)
             save_checkpoint(checkpoint, node_q=points.astype(np.float32), node_qd=state.velocities().astype(np.float32),
                             collider_q=state.collider_q.numpy(), collider_qd=state.collider_qd.numpy(),
                             time=state.time, frame=frame, **{k: v for k, v in totals.items()})
-            summary.update(_summary_numbers(totals, frame, steps_per_frame, dt))
+            summary.update(_summary_numbers(totals, frame, steps_by(frame), dt))
             write_json(summary_path, summary)
             bar.update(task, completed=frame, t=state.time)
 
     summary["status"] = "finished"
     write_json(summary_path, summary)
+    times = [steps_by(k) * dt for k in range(frames_total + 1)]
     if scene.pictures is not None:
-        times = [(k * steps_per_frame * dt, frame_path(out, k)) for k in range(frames_total + 1)]
-        scene.pictures(out, times)
+        scene.pictures(out, [(t, frame_path(out, k)) for k, t in enumerate(times)])
     else:
-        _pictures(out, scene, frames_total, faces, colliders)
+        _pictures(out, scene, times, faces, colliders)
     return summary
 
 
-def _summary_numbers(totals: dict, frame: int, steps_per_frame: int, dt: float) -> dict:
-    steps = frame * steps_per_frame
+def _summary_numbers(totals: dict, frame: int, steps: int, dt: float) -> dict:
     return {
         "steps": steps, "simulated_seconds": steps * dt, "frames": frame + 1,
         "wall_seconds": round(totals["wall_seconds"], 3), "max_elongation": totals["max_elongation"],
@@ -148,16 +152,16 @@ def _record(out, frame, points, faces, model, probe, limited, rest, totals) -> N
     totals["cloth_crossings"] += cloth_crossings(points, faces, model.device)
 
 
-def _pictures(out: Path, scene: Scene, frames_total: int, faces, colliders) -> None:
+def _pictures(out: Path, scene: Scene, times: list[float], faces, colliders) -> None:
     import trimesh
 
-    picks = np.unique(np.linspace(0, frames_total, 8).round().astype(int))
+    picks = np.unique(np.linspace(0, len(times) - 1, 8).round().astype(int))
     frames = []
     for k in picks:
         path = frame_path(out, k)
         if path.exists():
             pts = np.asarray(trimesh.load(path, process=False).vertices)
-            frames.append((f"t = {k * scene.frame_interval:.2f} s", pts))
+            frames.append((f"t = {times[k]:.2f} s", pts))
     if frames:
         images.render_sequence(out / "images" / "sequence.png", frames, faces, colliders, **scene.view)
         images.render_frame(out / "images" / "final.png", frames[-1][1], faces, colliders,
