@@ -148,13 +148,18 @@ def test_resume_with_nothing_to_resume_says_so_and_runs_from_the_start(tmp_path)
 def test_a_duration_within_a_frame_ends_the_run_there(tmp_path):
     """The run simulates its duration in whole steps, its last frame shorter where the
     duration ends within it (0.025 s of 1e-4 s steps in frames of 0.01 s: 250 steps, frames at
-    0, 0.01, 0.02 and 0.025 s)."""
+    0, 0.01, 0.02 and 0.025 s); resumed for 0.04 s, it goes on from 0.025 s to 0.04 s."""
     from party.scenes.rod_wind import build
 
     summary = run_scene(build(spacing=0.05, duration=0.025, frame_interval=0.01), tmp_path, progress=False)
     assert summary["steps"] == 250 and summary["simulated_seconds"] == pytest.approx(0.025)
     assert summary["frames"] == 4
     assert sorted(p.name for p in (tmp_path / "frames").iterdir())[-1] == "frame_000003.ply"
+    resumed = run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path, resume=True,
+                        progress=False)
+    assert resumed["steps"] == 400 and resumed["frames"] == 5
+    with np.load(tmp_path / "checkpoint.npz") as saved:
+        assert float(saved["time"]) == pytest.approx(0.04)
 
 
 def test_ctrl_c_says_how_to_go_on_and_exits_130(tmp_path):

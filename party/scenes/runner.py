@@ -65,6 +65,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     summary_path = out / "summary.json"
     totals = {"max_elongation": 1.0, "body_penetrations": 0, "cloth_crossings": 0, "wall_seconds": 0.0}
     first_frame = 0
+    steps_done = 0
     if resume and checkpoint.exists():
         saved = load_checkpoint(checkpoint)
         if saved["node_q"].shape != (model.node_count, 3):
@@ -76,6 +77,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
         state.collider_qd.assign(saved["collider_qd"])
         state.time = float(saved["time"])
         first_frame = int(saved["frame"]) + 1
+        steps_done = int(round(state.time / dt))  # off this run's frame grid where its duration was another's
         totals.update({k: float(saved[k]) for k in totals})
     else:
         for stale in (out / "frames").glob("frame_*.ply") if (out / "frames").exists() else []:
@@ -88,7 +90,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     summary = {
         "scene": scene.name, "status": "running", "nodes": model.node_count, "triangles": model.triangle_count,
         "dt": dt, "critical_dt": critical, "device": model.device,
-        **_summary_numbers(totals, first_frame - 1, steps_by(first_frame - 1), dt),  # a finished run resumed takes no step
+        **_summary_numbers(totals, first_frame - 1, steps_done, dt),  # a finished run resumed takes no step
         "parameters": scene.parameters, **scene.summary,
     }
     bar = Progress(TextColumn(f"[bold]{scene.name}[/]"), BarColumn(), TextColumn("{task.completed}/{task.total} frames"),
@@ -99,7 +101,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
         for frame in range(first_frame, frames_total + 1):
             start = time.perf_counter()
             try:  # a blow-up, or a step the solver refused (landing): the frames so far stand
-                for _ in range(steps_by(frame) - steps_by(frame - 1)):
+                for _ in range(steps_by(frame) - steps_done):
                     if scene.wind is not None:
                         control.wind = scene.wind(state.time)
                     scene.solver.step(state, scratch, control, dt)
@@ -116,14 +118,15 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
                         f"{speed:.3g} m/s); frames up to {frame - 1} are kept in {out / 'frames'}; "
                         f"try a smaller --dt, e.g. {_round_down(dt / 2):g}")
             except SimulationUnstable:
-                summary.update(_summary_numbers(totals, frame - 1, steps_by(frame - 1), dt), status="unstable")
+                summary.update(_summary_numbers(totals, frame - 1, steps_done, dt), status="unstable")
                 write_json(summary_path, summary)
                 raise
             _record(out, frame, points, faces, model, probe, limited, rest, totals)
             save_checkpoint(checkpoint, node_q=points.astype(np.float32), node_qd=state.velocities().astype(np.float32),
                             collider_q=state.collider_q.numpy(), collider_qd=state.collider_qd.numpy(),
                             time=state.time, frame=frame, **{k: v for k, v in totals.items()})
-            summary.update(_summary_numbers(totals, frame, steps_by(frame), dt))
+            steps_done = steps_by(frame)
+            summary.update(_summary_numbers(totals, frame, steps_done, dt))
             write_json(summary_path, summary)
             bar.update(task, completed=frame, t=state.time)
 
