@@ -52,7 +52,7 @@ def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_pa
         earlier = float(saved["wall_seconds"])
 
     monkeypatch.setattr(drape_checkpoint.DrapeCheckpoint, "save_draping", save)
-    monkeypatch.setattr(drape_module, "sew", lambda *args, **kwargs: pytest.fail("sewed again"))
+    monkeypatch.setattr(drape_checkpoint, "sew", lambda *args, **kwargs: pytest.fail("sewed again"))
     summary = drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver=solver, images=False,
                                  progress=False, resume=True)
     relaxation = summary["relaxation"]

@@ -10,7 +10,7 @@ import pytest
 import trimesh
 from PIL import Image
 
-from party.scenes import dress, garment_sim
+from party.scenes import drape_checkpoint, dress, garment_sim
 from party.scenes.drape_checkpoint import DrapeCheckpoint
 
 
@@ -61,7 +61,7 @@ def test_a_resumed_dress_takes_its_sewing_from_sewn_npz(dress_run, monkeypatch):
     """Resumed, the dress does not sew again: its model starts where the run's did (its frame 0),
     and its summary keeps the sewing's log."""
     out, summary = dress_run
-    monkeypatch.setattr(dress, "sew", lambda *args, **kwargs: pytest.fail("sewed again"))
+    monkeypatch.setattr(drape_checkpoint, "sew", lambda *args, **kwargs: pytest.fail("sewed again"))
     scene = dress.build(quick=True, out=out, resume=True)
     frame_0 = trimesh.load(out / "frames" / "frame_000000.ply", process=False).vertices
     assert np.array_equal(scene.model.state().positions(), frame_0)

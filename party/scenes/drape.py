@@ -53,7 +53,7 @@ from ..solvers.relax import RelaxResult, SolverRelax, total_energy
 from ..solvers.select import guard_every
 from ..solvers.settle import DRAPE_SWEEPS, Settled, settle
 from .drape_checkpoint import DrapeCheckpoint, restore_draping
-from .garment_sim import garment_model, relax_progress, relax_time_step, sew
+from .garment_sim import garment_model, relax_progress, relax_time_step
 
 EXPLICIT_ITERATIONS = 6000
 """Most iterations of the explicit solver's drape (:mod:`party.solvers.relax`): it stops when
@@ -111,12 +111,8 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
     def wall() -> float:
         return earlier + time.perf_counter() - started
 
-    if saved and "sewn_points" in saved:
-        sewn = checkpoint.sewn(garment, saved)
-    else:
-        sewn = sew(garment, the_body, fabric, device=device, max_iterations=sew_iterations, progress=progress,
-                   resume=checkpoint.sewing_stage(saved), on_stage=lambda stage: checkpoint.save_sewing(stage, wall()))
-        checkpoint.save_sewn(sewn, wall())
+    sewn = checkpoint.sew(saved, wall, garment, the_body, fabric, device=device, max_iterations=sew_iterations,
+                          progress=progress)
     model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)
     state = model.state()
     first_step, energy = restore_draping(state, saved)

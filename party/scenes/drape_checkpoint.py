@@ -21,15 +21,18 @@ import json
 import math
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
+from ..body.body import Body
 from ..errors import InvalidInput
+from ..fabric import Fabric
 from ..garment.assemble import Garment
 from ..model import State
 from ..output.frames import load_checkpoint, save_checkpoint
 from ..solvers.relax import RelaxResult
-from .garment_sim import Sewn, SewingStage
+from .garment_sim import Sewn, SewingStage, sew
 
 SAVE_SECONDS = 10.0
 """Least wall time [s] between two saves while draping."""
@@ -97,6 +100,18 @@ class DrapeCheckpoint:
                                "remove it or drop --resume")
         return Sewn(garment, net, node_map, points, saved["sewn_seam_gaps"], _log(saved, "sewn"),
                     _log(saved, "sewn_settling"), float(saved["sewn_dt"]))
+
+    def sew(self, saved: dict | None, wall: Callable[[], float], garment: Garment, body: Body, fabric: Fabric,
+            **sewing) -> Sewn:
+        """The sewn garment ``saved`` (:meth:`load`) holds; else :func:`~.garment_sim.sew` with
+        ``sewing``'s settings, gone on from the stage ``saved`` had finished (if any), saved
+        after each stage and once sewn with ``wall()`` [s] of the run by then."""
+        if saved is not None and "sewn_points" in saved:
+            return self.sewn(garment, saved)
+        sewn = sew(garment, body, fabric, resume=self.sewing_stage(saved),
+                   on_stage=lambda stage: self.save_sewing(stage, wall()), **sewing)
+        self.save_sewn(sewn, wall())
+        return sewn
 
     def save_sewn(self, sewn: Sewn, wall_seconds: float) -> None:
         """Save the garment as sewn, after ``wall_seconds`` [s] of the drape."""

@@ -24,17 +24,16 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from ..body.body import Body
 from ..body.dress_form import dress_form
 from ..collision import CollisionSettings
 from ..fabric import Fabric, wool_flannel
-from ..garment.assemble import Garment, assemble
+from ..garment.assemble import assemble
 from ..output import render
 from ..output.frames import write_json
 from ..pattern import load_pattern
 from ..solvers.select import DEFAULT_DT, check_solver, guard_every, make_solver
 from .drape_checkpoint import DrapeCheckpoint
-from .garment_sim import Sewn, garment_model, sew
+from .garment_sim import garment_model, sew
 from .scene import Scene, check_timing
 
 PATTERN = "dress_sleeves.json"
@@ -71,8 +70,10 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None
         inputs = {"scene": "dress", "spacing_m": spacing, "body": body.name, "fabric": fabric.to_dict(),
                   "sew_iterations": max_iterations}
         checkpoint = DrapeCheckpoint(Path(out) / SEWING_CHECKPOINT, inputs, run="dress sewing")
-        sewn = _sew_keeping(checkpoint, resume, garment, body, fabric, device=device, max_iterations=max_iterations,
-                            progress=progress)
+        saved = checkpoint.load() if resume else None
+        started, earlier = time.perf_counter(), float(saved["wall_seconds"]) if saved else 0.0
+        sewn = checkpoint.sew(saved, lambda: earlier + time.perf_counter() - started, garment, body, fabric,
+                              device=device, max_iterations=max_iterations, progress=progress)
     model = garment_model(sewn.net, fabric, sewn.points, body, device=device, name="dress")
     scene = Scene(
         name="dress", model=model, solver=make_solver(solver, model, collision=CollisionSettings(crossing_guard=True,
@@ -89,25 +90,6 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None
     )
     scene.pictures = lambda out, frames: _pictures(out, frames, sewn, body, scene)
     return scene
-
-
-def _sew_keeping(checkpoint: DrapeCheckpoint, resume: bool, garment: Garment, body: Body, fabric: Fabric,
-                 **sewing) -> Sewn:
-    """:func:`~.garment_sim.sew`, saving into ``checkpoint`` after each stage and once sewn;
-    with ``resume``, the sewn garment it holds, or the sewing gone on from its last stage."""
-    started = time.perf_counter()
-    saved = checkpoint.load() if resume else None
-    if saved is not None and "sewn_points" in saved:
-        return checkpoint.sewn(garment, saved)
-    earlier = float(saved["wall_seconds"]) if saved else 0.0
-
-    def wall() -> float:
-        return earlier + time.perf_counter() - started
-
-    sewn = sew(garment, body, fabric, resume=checkpoint.sewing_stage(saved),
-               on_stage=lambda stage: checkpoint.save_sewing(stage, wall()), **sewing)
-    checkpoint.save_sewn(sewn, wall())
-    return sewn
 
 
 def _pictures(out: Path, frames: list, sewn, body, scene: Scene) -> None:
