@@ -6,6 +6,7 @@ import warp as wp
 
 from party.body import box, sphere
 from party.collision import CollisionSettings, pipeline
+from party.errors import InvalidInput
 from party.fabric import wool_flannel
 from party.meshing import rectangular_net
 from party.model import ModelBuilder
@@ -227,13 +228,15 @@ def test_passes_leaving_out_what_the_last_pass_left_as_it_was_end_bit_for_bit_as
 
 def two_layers(gap: float, broad_phase: str):
     """Two 0.1 m squares of 1 cm net, ``gap`` [m] apart, no gravity, and a Collision() for them
-    without a body: the net, the model and the pipeline."""
+    without a body, searching the cloth with a 4 mm margin: the net, the model and the
+    pipeline."""
     net = rectangular_net(0.1, 0.1, 0.01)
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     for z in (0.0, gap):
         b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.full(net.node_count, z)])
     model = b.finalize("cpu")
-    return net, model, pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase=broad_phase))
+    settings = CollisionSettings(body=False, broad_phase=broad_phase, cloth_search_margin=4.0e-3)
+    return net, model, pipeline.CollisionPipeline(model, settings)
 
 
 @pytest.mark.parametrize("broad_phase", ["intervals", "bvh"])
@@ -374,3 +377,38 @@ def test_a_search_after_the_plastic_limit_covers_the_step_the_held_cloth_propose
     assert collision.searches == 2
     ends = x.numpy()[:, 2] + onward.numpy()[:, 2] * dt
     assert ends[patch].min() >= 0.9 * wool_flannel().thickness
+
+
+@pytest.mark.parametrize("solver_name,steps,push,wide_margin", [("explicit", 1500, 1.0, 4.0e-3),
+                                                                  ("implicit", 60, 0.5, 2.0e-3)])
+def test_the_cloth_search_margin_changes_how_often_the_cloth_is_searched_not_where_it_goes(solver_name, steps, push,
+                                                                                          wide_margin):
+    """Three layers pushed onto a box with a wide cloth search margin and one of 0.5 mm: the
+    narrow margin searches more often, and every step ends bit for bit where the wide one's
+    does. (With no candidate dropped for want of room in either, which would make the lists
+    differ: the implicit solver's 1/300 s steps sweep large boxes, and at 1 m/s or with 4 mm some
+    were.)"""
+    model, velocity = stacked_cloths(3, push, box((0.1, 0.1, 0.08), center=(0, 0, 0.0)))
+    dt = DT if solver_name == "explicit" else DEFAULT_DT["implicit"]
+
+    def run(margin: float) -> tuple[np.ndarray, int]:
+        solver = make_solver(solver_name, model, collision=CollisionSettings(passes=4, cloth_search_margin=margin))
+        state, scratch = model.state(velocity=velocity), model.state()
+        control = model.control()
+        frames = []
+        for _ in range(steps):
+            solver.step(state, scratch, control, dt)
+            state, scratch = scratch, state
+            frames.append(state.positions())
+        assert solver.collision.candidate_overflow() == 0
+        return np.array(frames), solver.collision.searches
+
+    (wide, wide_searches), (narrow, narrow_searches) = run(wide_margin), run(0.5e-3)
+    assert narrow_searches > wide_searches
+    assert np.array_equal(wide, narrow)
+    assert np.abs(wide[-1] - wide[0]).max() > 0.01  # the layers move
+
+
+def test_a_negative_search_margin_is_refused():
+    with pytest.raises(InvalidInput, match=r"^cloth_search_margin must be at least 0 m, got -0\.001$"):
+        CollisionSettings(cloth_search_margin=-1e-3)

@@ -205,6 +205,29 @@ def gather_cloth_triangles(
     out_count[i] = count
 
 
+@wp.func
+def steps_meet(x0: wp.vec3, vi: wp.vec3, eps: float, a: wp.vec3, b: wp.vec3, c: wp.vec3, va: wp.vec3, vb: wp.vec3,
+               vc: wp.vec3, dt: float) -> bool:
+    """Whether the box a node sweeps from ``x0`` at ``vi`` over ``dt`` [s], grown by ``eps``
+    [m], meets the box that triangle (a, b, c) sweeps at (va, vb, vc): every search, whatever its
+    margin, lists such a triangle (the search grows both boxes by more), and no node comes
+    within eps of a triangle whose box its own does not meet."""
+    lo, hi = step_box(x0, vi * dt, eps)
+    a1 = a + va * dt
+    b1 = b + vb * dt
+    c1 = c + vc * dt
+    t_lo = wp.min(wp.min(wp.min(a, b), c), wp.min(wp.min(a1, b1), c1))
+    t_hi = wp.max(wp.max(wp.max(a, b), c), wp.max(wp.max(a1, b1), c1))
+    return boxes_overlap(lo, hi, t_lo, t_hi)
+
+
+@wp.func
+def nearer(d: float, t: int, other_d: float, other_t: int) -> bool:
+    """Whether a contact at distance ``d`` [m] with triangle ``t`` comes before one at
+    ``other_d`` with ``other_t`` (:func:`detect_cloth`'s order)."""
+    return d < other_d or (d == other_d and t < other_t)
+
+
 @wp.kernel
 def detect_cloth(
     first: int,
@@ -225,7 +248,13 @@ def detect_cloth(
 
     For each candidate the closest point q (barycentric w) gives the distance d and the side n
     the node is on at the start of the step; the pair is a contact when the predicted gap
-    d + ((v_i - v_q) . n) dt is below eps. The nearest MAX_CONTACTS are kept.
+    d + ((v_i - v_q) . n) dt is below eps, and the node's step comes within eps of the
+    triangle's in the boxes they sweep (:func:`steps_meet`: the prediction alone also took
+    triangles that a node passes sideways, beyond their edges, at speed, and which only a search
+    with a wider margin than needed had listed). The nearest MAX_CONTACTS are kept, in order of
+    distance and then of triangle index: the contacts, and so the response's sums, do not depend
+    on the order in which the search listed the candidates, nor on how many farther ones it
+    listed (a search margin changes how often the cloth is searched, not where it goes).
     """
     i = first + wp.tid()
     x0 = x[i]
@@ -240,6 +269,8 @@ def detect_cloth(
         a = x[ta]
         b = x[tb]
         cc = x[tc]
+        if not steps_meet(x0, vi, eps, a, b, cc, v[ta], v[tb], v[tc], dt):
+            continue
         w = closest_point_barycentric(x0, a, b, cc)
         gap = x0 - interpolate(w, a, b, cc)
         d = wp.length(gap)
@@ -257,21 +288,24 @@ def detect_cloth(
         predicted = d + wp.dot(vi - vq, n) * dt
         if predicted >= eps and d >= eps:
             continue
+        # insert in (d, t) order; beyond MAX_CONTACTS the last falls off
         slot = count
-        if count >= MAX_CONTACTS:
-            slot = int(-1)
-            worst = d
-            for s in range(MAX_CONTACTS):
-                if contact_d[i, s] > worst:
-                    worst = contact_d[i, s]
-                    slot = s
-        else:
-            count += 1
-        if slot >= 0:
+        while slot > 0:
+            if not nearer(d, t, contact_d[i, slot - 1], contact_tri[i, slot - 1]):
+                break
+            if slot < MAX_CONTACTS:
+                contact_tri[i, slot] = contact_tri[i, slot - 1]
+                contact_w[i, slot] = contact_w[i, slot - 1]
+                contact_n[i, slot] = contact_n[i, slot - 1]
+                contact_d[i, slot] = contact_d[i, slot - 1]
+            slot -= 1
+        if slot < MAX_CONTACTS:
             contact_tri[i, slot] = t
             contact_w[i, slot] = w
             contact_n[i, slot] = n
             contact_d[i, slot] = d
+        if count < MAX_CONTACTS:
+            count += 1
     contact_count[i] = count
 
 
