@@ -210,7 +210,7 @@ def test_a_complete_list_of_body_candidates_serves_the_next_step_within_the_box_
     state, x, collision = pipeline(floor(0.0, size=2.0), 0.02)
     collision.apply(x, step_down(0.01), state, dt)
     assert collision.body_face_count.numpy()[0] == 0
-    assert 0.006 > 0.5 * collision.margin
+    assert 0.006 > 0.5 * collision.body_margin
     collision.apply(x, step_down(0.006), state, dt)
     assert np.allclose(collision._body_step_ref.numpy()[0], [0.0, 0.0, -0.01])
     through = step_down(0.03)

@@ -257,7 +257,7 @@ def test_cloth_moving_as_a_whole_keeps_its_cloth_candidates(broad_phase):
     dt = 1.0 / 300.0
     start = model.host["points"].astype(np.float32)
     common = np.array([1.2, 0.0, -0.6], np.float32)
-    assert np.linalg.norm(common) * dt > 0.5 * collision.margin
+    assert np.linalg.norm(common) * dt > 0.5 * collision.cloth_margin
     x = wp.array(start, dtype=wp.vec3, device="cpu")
     v = wp.zeros(model.node_count, dtype=wp.vec3, device="cpu")
     for k in range(25):
@@ -339,7 +339,7 @@ def test_a_step_proposed_again_from_where_the_cloth_stayed_keeps_its_candidates(
         proposed = velocities(0.01)
         collision.apply(x, proposed, state, dt)
         assert collision.searches == searches and np.array_equal(proposed.numpy(), velocities(0.01).numpy())
-    assert 0.5 * collision.margin < 0.0025
+    assert 0.5 * collision.cloth_margin < 0.0025
     collision.apply(x, velocities(0.01, 0.005), state, dt)
     assert collision.searches == 2
     through = velocities(0.03)
@@ -377,7 +377,7 @@ def test_a_search_after_the_plastic_limit_covers_the_step_the_held_cloth_propose
     held = wp.array((patch | np.isin(np.arange(model.node_count), odd)).astype(np.int32), dtype=int, device="cpu")
     collision.apply(x, velocities(0.0, 0.005), state, dt, continuing=True, changed=held)
     assert collision.searches == 2
-    assert 0.5 * collision.margin < 0.005  # the sideways step leaves both tests
+    assert 0.5 * collision.cloth_margin < 0.005  # the sideways step leaves both tests
     onward = velocities(0.0115, 0.005)
     collision.apply(x, onward, state, dt)
     assert collision.searches == 2

@@ -147,7 +147,7 @@ class CollisionPipeline:
         self.has_body = settings.body and len(model.collider_faces) > 0
         self.has_cloth = settings.cloth and model.triangle_count > 0
         self.body_moving = bool(np.any(model.collider_velocity != 0.0))
-        self.margin = float(settings.search_margin)
+        self.body_margin = float(settings.search_margin)
         self.cloth_margin = cloth_search_margin(model, settings)
         self.bvh = settings.broad_phase == "bvh"
         self._touched = wp.zeros(n, dtype=int, device=dev)
@@ -321,7 +321,7 @@ class CollisionPipeline:
         launch(landing_substeps, dim=m.node_count,
                inputs=[state.node_q, state.node_qd, m.node_inv_mass, m.node_thickness, self.node_length,
                        self.body_tree.id, m.collider_faces, state.collider_qd, self._body_speed, m.gravity, dt,
-                       self.margin, LANDING_REACH, self._most], device=m.device)
+                       self.body_margin, LANDING_REACH, self._most], device=m.device)
         needed = int(self._most.numpy()[0])
         if needed > MAX_LANDING_SUBSTEPS:
             raise SimulationUnstable(f"a step of {dt:g} s is too long for cloth meeting the body: landing would take "
@@ -368,7 +368,7 @@ class CollisionPipeline:
         rest.)"""
         m = self.model
         dev = m.device
-        half = 0.5 * self.margin
+        half = 0.5 * self.body_margin
         everything = int((self.body_moving or not self._body_built) and not continuing)
         if everything:
             self.searches += 1
