@@ -23,23 +23,11 @@ from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, larg
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
 
-CLOTH_MARGIN_PER_ELEMENT = 0.25
-"""The cloth search's margin as a share of the net's median element (at most the body's). Each
-node's search lists the triangles within eps plus twice the margin, and where that reaches
-beyond the triangles a fold can bring (``Model.node_near``) it lists the node's own layer's:
-a 1 m square of cotton at 32k nodes (5.6 mm apart) kept 24.8 triangles a node with 4 mm, 2.0
-with 1.4 mm, and took 61 ms a step instead of 74 to 88, to the same positions
-(``out/scratch/square_margin.py``)."""
-
-
 def cloth_search_margin(model: Model, settings: "CollisionSettings") -> float:
     """The margin [m] of the search for the cloth's own triangles (``cloth_search_margin``)."""
-    if settings.cloth_search_margin is not None:
-        return float(settings.cloth_search_margin)
-    rest = model.host["element_params"][:, 0] if model.element_count else np.zeros(0)
-    if len(rest) == 0:
+    if settings.cloth_search_margin is None:
         return float(settings.search_margin)
-    return min(float(settings.search_margin), CLOTH_MARGIN_PER_ELEMENT * float(np.median(rest)))
+    return float(settings.cloth_search_margin)
 
 
 @dataclass(frozen=True)
@@ -60,12 +48,16 @@ class CollisionSettings:
             this far, so a larger margin means fewer searches but more candidates.
         cloth_search_margin: The same for the cloth's own triangles [m] (a search is repeated
             once some node has moved half this far beyond the motion common to all nodes, or
-            some node's step half this far from the step it was searched for). None: a quarter
-            of the net's median element (:data:`CLOTH_MARGIN_PER_ELEMENT`), at most
+            some node's step half this far from the step it was searched for); None: as
             ``search_margin``. Where no node's candidates overflow (:data:`MAX_CANDIDATES`), it
             changes how often the cloth is searched, not the steps (tested): the contacts are
             only those a search with no margin lists too, in an order of their own
-            (:func:`~party.collision.cloth.detect_cloth`).
+            (:func:`~party.collision.cloth.detect_cloth`). A finer net lists fewer of its own
+            layer's triangles with a smaller one: a 1 m square of cotton at 32k nodes (5.6 mm
+            apart) kept 24.8 triangles a node with 4 mm and 2.0 with 1.4 mm, 88 ms a step against
+            163 (``out/scratch/square_margin.py``, ``benchmarks/scaling.py``); but the explicit
+            solver's small steps then search more often, and the dress demo's 15 mm net took 8 %
+            longer with 3.75 mm, so the default stays 4 mm (docs/design.md).
         max_cells: Largest number of intervals per axis in the interval lists.
         crossing_guard: Check steps' ends for edges newly through triangles and revert them
             (:mod:`party.collision.crossing_guard`).
