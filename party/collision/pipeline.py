@@ -23,13 +23,6 @@ from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, larg
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
 
-def cloth_search_margin(model: Model, settings: "CollisionSettings") -> float:
-    """The margin [m] of the search for the cloth's own triangles (``cloth_search_margin``)."""
-    if settings.cloth_search_margin is None:
-        return float(settings.search_margin)
-    return float(settings.cloth_search_margin)
-
-
 @dataclass(frozen=True)
 class CollisionSettings:
     """How collisions are handled.
@@ -140,7 +133,8 @@ class CollisionPipeline:
         self.has_cloth = settings.cloth and model.triangle_count > 0
         self.body_moving = bool(np.any(model.collider_velocity != 0.0))
         self.body_margin = float(settings.search_margin)
-        self.cloth_margin = cloth_search_margin(model, settings)
+        self.cloth_margin = float(settings.search_margin if settings.cloth_search_margin is None
+                                  else settings.cloth_search_margin)
         self.bvh = settings.broad_phase == "bvh"
         self._touched = wp.zeros(n, dtype=int, device=dev)
         self._settled = wp.zeros(n, dtype=int, device=dev)
