@@ -106,11 +106,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
               "seams_file": None if seams_file is None else str(Path(seams_file).resolve())}
     checkpoint = DrapeCheckpoint(Path(out) / "checkpoint.npz", inputs)
     saved = checkpoint.load() if resume else None
-    earlier = float(saved["wall_seconds"]) if saved else 0.0
-
-    def wall() -> float:
-        return earlier + time.perf_counter() - started
-
+    wall = checkpoint.wall_clock(saved, started)
     sewn = checkpoint.sew(saved, wall, garment, the_body, fabric, device=device, max_iterations=sew_iterations,
                           progress=progress)
     model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)

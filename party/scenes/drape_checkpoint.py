@@ -101,6 +101,13 @@ class DrapeCheckpoint:
         return Sewn(garment, net, node_map, points, saved["sewn_seam_gaps"], _log(saved, "sewn"),
                     _log(saved, "sewn_settling"), float(saved["sewn_dt"]))
 
+    @staticmethod
+    def wall_clock(saved: dict | None, started: float) -> Callable[[], float]:
+        """The run's wall time [s] so far: what ``saved`` (:meth:`load`) had recorded, plus the
+        time since ``started`` (a :func:`time.perf_counter` reading)."""
+        earlier = float(saved["wall_seconds"]) if saved else 0.0
+        return lambda: earlier + time.perf_counter() - started
+
     def sew(self, saved: dict | None, wall: Callable[[], float], garment: Garment, body: Body, fabric: Fabric,
             **sewing) -> Sewn:
         """The sewn garment ``saved`` (:meth:`load`) holds; else :func:`~.garment_sim.sew` with

@@ -71,8 +71,7 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None
                   "sew_iterations": max_iterations}
         checkpoint = DrapeCheckpoint(Path(out) / SEWING_CHECKPOINT, inputs, run="dress sewing")
         saved = checkpoint.load() if resume else None
-        started, earlier = time.perf_counter(), float(saved["wall_seconds"]) if saved else 0.0
-        sewn = checkpoint.sew(saved, lambda: earlier + time.perf_counter() - started, garment, body, fabric,
+        sewn = checkpoint.sew(saved, checkpoint.wall_clock(saved, time.perf_counter()), garment, body, fabric,
                               device=device, max_iterations=max_iterations, progress=progress)
     model = garment_model(sewn.net, fabric, sewn.points, body, device=device, name="dress")
     scene = Scene(
