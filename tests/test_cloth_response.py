@@ -412,3 +412,25 @@ def test_the_cloth_search_margin_changes_how_often_the_cloth_is_searched_not_whe
 def test_a_negative_search_margin_is_refused():
     with pytest.raises(InvalidInput, match=r"^cloth_search_margin must be at least 0 m, got -0\.001$"):
         CollisionSettings(cloth_search_margin=-1e-3)
+
+
+@pytest.mark.parametrize("spacing, margin", [(0.02, 4.0e-3), (0.004, 1.0e-3)])
+def test_the_cloth_search_margin_narrows_where_it_would_list_the_nets_own_layer(spacing, margin):
+    """By default the cloth is searched with the body's 4 mm margin, unless a flat net is so
+    fine that 4 mm lists its own layer's triangles beyond what a fold can bring: then a quarter
+    of its element, under which the net lists none of them."""
+    net = rectangular_net(0.2, 0.2, spacing)
+    b = ModelBuilder()
+    b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
+    model = b.finalize("cpu")
+    collision = pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase="bvh"))
+    assert collision.cloth_margin == pytest.approx(margin)
+    x, still = model.node_rest_points, wp.zeros(model.node_count, dtype=wp.vec3, device="cpu")
+
+    def listed(width: float) -> float:
+        collision.cloth_margin = width
+        collision._search_cloth(x, still, 0.0, False)
+        return collision.cloth_candidate_count.numpy().mean()
+
+    assert listed(margin) == listed(0.0) == 0.0
+    assert (listed(4.0e-3) > 1.0) == (spacing < 0.01)

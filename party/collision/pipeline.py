@@ -23,6 +23,28 @@ from .landing import LANDING_REACH, MAX_LANDING_SUBSTEPS, landing_substeps, larg
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
 
+CLOTH_MARGIN_PER_ELEMENT = 0.25
+"""The cloth search's margin, as a share of the net's median element, where ``search_margin``
+would list the net's own layer (:meth:`CollisionPipeline.default_cloth_margin`): the 1 m square
+of cotton at 32k nodes (5.6 mm apart, 1.4 mm) kept 2.0 triangles a node after five steps
+against 24.8 with 4 mm, at 100k (3.2 mm apart, 0.8 mm) none against 39.2, and took 451 and 511
+ms a step against 482 and 623 (``out/scratch/square_margin.py``, in turn)."""
+
+OWN_LAYER_LISTED = 0.5
+"""Cloth triangles a node that ``search_margin`` may add to the set-up positions' listing before
+the cloth's margin narrows (:data:`CLOTH_MARGIN_PER_ELEMENT`). A search lists the triangles
+within eps plus its margin, and in a net finer than that reach it lists the node's own layer
+beyond what a fold can bring (``Model.node_near``), none of which can be a contact while the
+layer is flat: a flat net's ring of them comes in at some 2 to 14 a node (a 1 m square of cotton
+at 32k nodes, 5.6 mm apart: 0 with 0.5 mm, 2.0 with 1 to 2 mm, 13.8 with 3 and 4 mm;
+``out/scratch/margin_cands.py``). Once listed they are tested at every detection, though most
+are dropped early (:data:`CLOTH_MARGIN_PER_ELEMENT`). A narrower margin means more searches, so
+nets that list almost none of their own keep the widest: the dress demo's 15 mm net lists 0.05 a
+node with 4 mm, and searched 1,500 times in its 12,000 steps of 1e-4 s with 3.75 mm against
+1,412 with 4 mm, some 27 ms a search with the interval lists, in 3 to 9 s more
+(``out/scratch/dress_margin.py``; docs/design.md, Collision)."""
+
+
 @dataclass(frozen=True)
 class CollisionSettings:
     """How collisions are handled.
@@ -42,15 +64,11 @@ class CollisionSettings:
         cloth_search_margin: The same for the cloth's own triangles [m] (a search is repeated
             once some node has moved half this far beyond the motion common to all nodes, or
             some node's step half this far from the step it was searched for); None: as
-            ``search_margin``. Where no node's candidates overflow (:data:`MAX_CANDIDATES`), it
-            changes how often the cloth is searched, not the steps (tested): the contacts are
-            only those a search with no margin lists too, in an order of their own
-            (:func:`~party.collision.cloth.detect_cloth`). A finer net lists fewer of its own
-            layer's triangles with a smaller one: a 1 m square of cotton at 32k nodes (5.6 mm
-            apart) kept 24.8 triangles a node with 4 mm and 2.0 with 1.4 mm, 88 ms a step against
-            163 (``out/scratch/square_margin.py``, ``benchmarks/scaling.py``); but the explicit
-            solver's small steps then search more often, and the dress demo's 15 mm net took 8 %
-            longer with 3.75 mm, so the default stays 4 mm (docs/design.md).
+            ``search_margin``, or a quarter of the net's element where that would list the
+            set-up positions' own layer (:meth:`CollisionPipeline.default_cloth_margin`). Where no node's
+            candidates overflow (:data:`MAX_CANDIDATES`), it changes how often the cloth is
+            searched, not the steps (tested): the contacts are only those a search with no
+            margin lists too, in an order of their own (:func:`~party.collision.cloth.detect_cloth`).
         max_cells: Largest number of intervals per axis in the interval lists.
         crossing_guard: Check steps' ends for edges newly through triangles and revert them
             (:mod:`party.collision.crossing_guard`).
@@ -203,11 +221,36 @@ class CollisionPipeline:
             self.contact_n = wp.zeros((n, MAX_CONTACTS), dtype=wp.vec3, device=dev)
             self.contact_d = wp.zeros((n, MAX_CONTACTS), dtype=float, device=dev)
             self.contact_count = wp.zeros(n, dtype=int, device=dev)
+            if settings.cloth_search_margin is None:
+                self.cloth_margin = self.default_cloth_margin()
         if self.has_cloth or self.has_body_vertices:
             # per-node sums of the responses of one pass, applied and reset after each
             self.dv = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.dx = wp.zeros(n, dtype=wp.vec3, device=dev)
             self.hits = wp.zeros(n, dtype=int, device=dev)
+
+    def default_cloth_margin(self) -> float:
+        """The cloth search's margin [m] when none is set: ``search_margin`` unless under it
+        the model's set-up positions list more than :data:`OWN_LAYER_LISTED` cloth triangles a
+        node beyond those they list with none; then :data:`CLOTH_MARGIN_PER_ELEMENT` of the
+        net's median element, if that is narrower (two searches at set-up, forgotten after)."""
+        x = self.model.node_rest_points
+        still = wp.zeros_like(x)
+
+        def listed(margin: float) -> float:
+            self.cloth_margin = margin
+            self._search_cloth(x, still, 0.0, False)
+            return float(self.cloth_candidate_count.numpy().mean())
+
+        widest = float(self.settings.search_margin)
+        chosen = widest
+        if listed(widest) > listed(0.0) + OWN_LAYER_LISTED:
+            element = float(np.median(self.model.host["element_params"][:, 0])) if self.model.element_count else widest
+            chosen = min(widest, CLOTH_MARGIN_PER_ELEMENT * element)
+        self.searches = 0
+        self._cloth_searched = False
+        self._overflow.zero_()
+        return chosen
 
     def apply(self, x: wp.array, v: wp.array, state: State, dt: float, *, continuing: bool = False,
               changed: wp.array | None = None) -> None:
