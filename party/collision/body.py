@@ -93,9 +93,9 @@ def gather_body_faces(
     for c in range(sel[1], sel[2] + 1):
         for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
             f = lists.ids[j]
-            if not first_visit(lists, f, axis, sel[1], c):
-                continue
             if not boxes_overlap(lo, hi, lists.item_lo[f], lists.item_hi[f]):
+                continue
+            if not first_visit(lists, f, axis, sel[1], c):
                 continue
             if count < MAX_FACES:
                 faces_out[i, count] = f

@@ -196,9 +196,10 @@ def gather_cloth_triangles(
     for c in range(sel[1], sel[2] + 1):
         for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
             t = lists.ids[j]
-            if not first_visit(lists, t, axis, sel[1], c):
-                continue
+            # the box rejects most of the slab's entries, and costs less than first_visit's division
             if not boxes_overlap(lo, hi, lists.item_lo[t], lists.item_hi[t]):
+                continue
+            if not first_visit(lists, t, axis, sel[1], c):
                 continue
             count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count, out, out_distance,
                                    overflow)

@@ -236,11 +236,11 @@ def _broad_phase_candidates(lists: IntervalLists, lo: wp.array(dtype=wp.vec3), h
     for c in range(sel[1], sel[2] + 1):
         for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
             item = lists.ids[j]
-            if not first_visit(lists, item, axis, sel[1], c):
-                continue
             if not (lists.item_lo[item][0] <= hi[q][0] and lo[q][0] <= lists.item_hi[item][0]
                     and lists.item_lo[item][1] <= hi[q][1] and lo[q][1] <= lists.item_hi[item][1]
                     and lists.item_lo[item][2] <= hi[q][2] and lo[q][2] <= lists.item_hi[item][2]):
+                continue
+            if not first_visit(lists, item, axis, sel[1], c):
                 continue
             if found < max_out:
                 out[q, found] = item
