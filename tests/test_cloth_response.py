@@ -425,12 +425,6 @@ def test_the_cloth_search_margin_narrows_where_it_would_list_the_nets_own_layer(
     model = b.finalize("cpu")
     collision = pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase="bvh"))
     assert collision.cloth_margin == pytest.approx(margin)
-    x, still = model.node_rest_points, wp.zeros(model.node_count, dtype=wp.vec3, device="cpu")
-
-    def listed(width: float) -> float:
-        collision.cloth_margin = width
-        collision._search_cloth(x, still, 0.0, False)
-        return collision.cloth_candidate_count.numpy().mean()
-
-    assert listed(margin) == listed(0.0) == 0.0
-    assert (listed(4.0e-3) > 1.0) == (spacing < 0.01)
+    x = model.node_rest_points
+    assert collision.listed_per_node(x, margin) == collision.listed_per_node(x, 0.0) == 0.0
+    assert (collision.listed_per_node(x, 4.0e-3) > 1.0) == (spacing < 0.01)

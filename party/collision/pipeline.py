@@ -65,10 +65,11 @@ class CollisionSettings:
             once some node has moved half this far beyond the motion common to all nodes, or
             some node's step half this far from the step it was searched for); None: as
             ``search_margin``, or a quarter of the net's element where that would list the
-            set-up positions' own layer (:meth:`CollisionPipeline.default_cloth_margin`). Where no node's
-            candidates overflow (:data:`MAX_CANDIDATES`), it changes how often the cloth is
-            searched, not the steps (tested): the contacts are only those a search with no
-            margin lists too, in an order of their own (:func:`~party.collision.cloth.detect_cloth`).
+            set-up positions' own layer (:meth:`CollisionPipeline.default_cloth_margin`).
+            Where no node's candidates overflow (:data:`MAX_CANDIDATES`), it changes how often
+            the cloth is searched, not the steps (tested): the contacts are only those a search
+            with no margin lists too, in an order of their own
+            (:func:`~party.collision.cloth.detect_cloth`).
         max_cells: Largest number of intervals per axis in the interval lists.
         crossing_guard: Check steps' ends for edges newly through triangles and revert them
             (:mod:`party.collision.crossing_guard`).
@@ -233,24 +234,27 @@ class CollisionPipeline:
         """The cloth search's margin [m] when none is set: ``search_margin`` unless under it
         the model's set-up positions list more than :data:`OWN_LAYER_LISTED` cloth triangles a
         node beyond those they list with none; then :data:`CLOTH_MARGIN_PER_ELEMENT` of the
-        net's median element, if that is narrower (two searches at set-up, forgotten after)."""
+        net's median element, if that is narrower (two searches at set-up)."""
         x = self.model.node_rest_points
-        still = wp.zeros_like(x)
-
-        def listed(margin: float) -> float:
-            self.cloth_margin = margin
-            self._search_cloth(x, still, 0.0, False)
-            return float(self.cloth_candidate_count.numpy().mean())
-
         widest = float(self.settings.search_margin)
-        chosen = widest
-        if listed(widest) > listed(0.0) + OWN_LAYER_LISTED:
-            element = float(np.median(self.model.host["element_params"][:, 0])) if self.model.element_count else widest
-            chosen = min(widest, CLOTH_MARGIN_PER_ELEMENT * element)
-        self.searches = 0
+        own_layer = self.listed_per_node(x, widest) > self.listed_per_node(x, 0.0) + OWN_LAYER_LISTED
+        self._overflow.zero_()  # the run's own searches report theirs
+        if not own_layer:
+            return widest
+        element = float(np.median(self.model.host["element_params"][:, 0]))
+        return min(widest, CLOTH_MARGIN_PER_ELEMENT * element)
+
+    def listed_per_node(self, x: wp.array, margin: float) -> float:
+        """Cloth triangles a node, on average, that a search of nodes at rest at ``x`` with
+        ``margin`` [m] lists (a host sync). The next Collision() searches afresh, and
+        :attr:`searches` does not count this one."""
+        kept = self.cloth_margin
+        self.cloth_margin = margin
+        self._search_cloth(x, wp.zeros_like(x), 0.0, False)
+        self.cloth_margin = kept
+        self.searches -= 1
         self._cloth_searched = False
-        self._overflow.zero_()
-        return chosen
+        return float(self.cloth_candidate_count.numpy().mean())
 
     def apply(self, x: wp.array, v: wp.array, state: State, dt: float, *, continuing: bool = False,
               changed: wp.array | None = None) -> None:
