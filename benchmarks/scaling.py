@@ -14,8 +14,10 @@ that far apart and the square grows. In the 1 m square a finer net is stiffer fo
 (a node's K dt^2 / m grows as 1 / spacing^2), and from 64k nodes (4 mm) the implicit solver takes
 more sweeps a step than its 10 (``STIFFNESS_PER_SWEEP`` in ``party.solvers.implicit.solver``;
 printed per size); with self-collision each node's search also meets more triangles of its own
-layer within the thickness (3 mm) plus margin (the cloth triangles kept per node, printed). At a fixed spacing the cost per node stays the
-same. ``benchmarks/step_profile.py square --nodes N`` shows where one size's step goes.
+layer within the thickness (3 mm) plus margin (the cloth triangles kept per node, printed; the
+margin narrows to a quarter of the element where the body's 4 mm would list the flat net's own
+layer, ``CollisionPipeline.default_cloth_margin``). At a fixed spacing the cost per node stays
+the same. ``benchmarks/step_profile.py square --nodes N`` shows where one size's step goes.
 """
 
 from __future__ import annotations
