@@ -414,8 +414,9 @@ def test_a_negative_search_margin_is_refused():
         CollisionSettings(cloth_search_margin=-1e-3)
 
 
+@pytest.mark.parametrize("broad_phase", ["intervals", "bvh"])
 @pytest.mark.parametrize("spacing, margin", [(0.02, 4.0e-3), (0.004, 1.0e-3)])
-def test_the_cloth_search_margin_narrows_where_it_would_list_the_nets_own_layer(spacing, margin):
+def test_the_cloth_search_margin_narrows_where_it_would_list_the_nets_own_layer(spacing, margin, broad_phase):
     """By default the cloth is searched with the body's 4 mm margin, unless a flat net is so
     fine that 4 mm lists its own layer's triangles beyond what a fold can bring: then a quarter
     of its element, under which the net lists none of them."""
@@ -423,7 +424,7 @@ def test_the_cloth_search_margin_narrows_where_it_would_list_the_nets_own_layer(
     b = ModelBuilder()
     b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.zeros(net.node_count)])
     model = b.finalize("cpu")
-    collision = pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase="bvh"))
+    collision = pipeline.CollisionPipeline(model, CollisionSettings(body=False, broad_phase=broad_phase))
     assert collision.cloth_margin == pytest.approx(margin)
     x = model.node_rest_points
     assert collision.listed_per_node(x, margin) == collision.listed_per_node(x, 0.0) == 0.0
