@@ -41,7 +41,7 @@ at 32k nodes, 5.6 mm apart: 0 with 0.5 mm, 2.0 with 1 to 2 mm, 13.8 with 3 and 4
 are dropped early (:data:`CLOTH_MARGIN_PER_ELEMENT`). A narrower margin means more searches, so
 nets that list almost none of their own keep the widest: the dress demo's 15 mm net lists 0.05 a
 node with 4 mm, and searched 1,500 times in its 12,000 steps of 1e-4 s with 3.75 mm against
-1,412 with 4 mm, some 27 ms a search with the interval lists, in 3 to 9 s more
+1,412 with 4 mm, some 27 ms a search with the interval lists then (14 since), in 3 to 9 s more
 (``out/scratch/dress_margin.py``; docs/design.md, Collision)."""
 
 
