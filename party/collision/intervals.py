@@ -18,6 +18,7 @@ import warp as wp
 
 from ..errors import PartyError
 from ..launch import launch
+from .geometry import boxes_overlap
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
@@ -236,9 +237,7 @@ def _broad_phase_candidates(lists: IntervalLists, lo: wp.array(dtype=wp.vec3), h
     for c in range(sel[1], sel[2] + 1):
         for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
             item = lists.ids[j]
-            if not (lists.item_lo[item][0] <= hi[q][0] and lo[q][0] <= lists.item_hi[item][0]
-                    and lists.item_lo[item][1] <= hi[q][1] and lo[q][1] <= lists.item_hi[item][1]
-                    and lists.item_lo[item][2] <= hi[q][2] and lo[q][2] <= lists.item_hi[item][2]):
+            if not boxes_overlap(lo[q], hi[q], lists.item_lo[item], lists.item_hi[item]):
                 continue
             if not first_visit(lists, item, axis, sel[1], c):
                 continue
