@@ -18,7 +18,9 @@ and how far the final shape lies from party implicit's: the mean and the largest
 node of either to the nearest point of the other's surface, the largest being the symmetric
 Hausdorff distance between the nodes and the surfaces; a node's nearest node would count the net's
 sampling as a difference, up to half a spacing between two nets on one surface; and the stretch
-along the grid, the largest and the share of row or column neighbours beyond 5 %). The outcome is
+along the grid, the largest and the share of row or column neighbours beyond 5 %; and the nodes'
+mean speed over the last :data:`LAST_INTERVAL`, which says how near rest the shapes compared are:
+at 1 s the 64x64 sheets still moved at 5 to 60 mm/s on average on 2026-12-06). The outcome is
 equal where no node is inside the sphere, no edge crosses the cloth (with self-collision on) and the
 shapes lie within :data:`SAME_SHAPE` of each other. ``party-implicit-150hz`` is party's implicit
 solver at Blender's step (``--dt``: 30 frames a second at quality 5, 1/150 s, where party's own is
@@ -80,6 +82,9 @@ SAME_SHAPE = 0.01
 """Largest distance between two systems' final shapes [m] for an equal outcome (issue 4: 1 cm)."""
 STRETCHED = 0.05
 """Strain beyond which :func:`grid_stretch` counts a row or column neighbour pair as stretched [-]."""
+LAST_INTERVAL = 1.0 / 30.0
+"""The time [s] over which each system's final mean speed is taken: the nodes' displacement from
+this long before the end (a frame of Blender's 30 fps, two of Newton's 60 fps) over it."""
 
 
 def main() -> None:
@@ -192,7 +197,8 @@ def run_sphere(system: str, grid: int, self_collision: bool, seconds: float, tim
         data = np.load(out)
         total = time.perf_counter() - started
         return {"startup_seconds": float(total - data["wall_seconds"]), "wall_per_simulated_second":
-                float(data["wall_seconds"] / data["simulated_seconds"]), **outcome(data["points"], data["triangles"])}
+                float(data["wall_seconds"] / data["simulated_seconds"]),
+                **outcome(data["points"], data["triangles"], data["points_before"], float(data["interval"]))}
 
 
 def sphere_fabric_json() -> str:
@@ -217,27 +223,34 @@ def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, d
     control = scene.model.control()
     steps = int(round(scene.duration / scene.dt))
     first = max(int(round(scene.frame_interval / scene.dt)), 1)
+    last = min(max(int(round(LAST_INTERVAL / scene.dt)), 1), steps - first)
     for _ in range(first):
         scene.solver.step(state, scratch, control, scene.dt)
         state, scratch = scratch, state
     wp.synchronize()
     startup = time.perf_counter() - started
     t = time.perf_counter()
-    for _ in range(steps - first):
+    for k in range(steps - first):
+        if k == steps - first - last:
+            before = state.positions()  # a copy from the device, some microseconds
         scene.solver.step(state, scratch, control, scene.dt)
         state, scratch = scratch, state
     wp.synchronize()
     wall = (time.perf_counter() - t) * steps / (steps - first)
     return {"startup_seconds": startup, "wall_per_simulated_second": wall / scene.duration,
-            **outcome(state.positions(), scene.model.triangles)}
+            **outcome(state.positions(), scene.model.triangles, before, last * scene.dt)}
 
 
-def outcome(points: np.ndarray, triangles: np.ndarray) -> dict:
+def outcome(points: np.ndarray, triangles: np.ndarray, points_before: np.ndarray, interval: float) -> dict:
+    """The final state's outcome, checked alike for every system, from its nodes' ``points`` [m]
+    and ``triangles``, and their ``points_before`` [m] ``interval`` [s] earlier (the mean speed
+    over it, ``speed_mean_m_s``)."""
     from party.output.metrics import cloth_crossings
 
     r = np.linalg.norm(points, axis=1)
     nan = bool(np.isnan(points).any())
-    return {"nodes": int(len(points)), "min_distance_from_centre_m": float(r.min()),
+    speed = float(np.linalg.norm(np.asarray(points) - np.asarray(points_before), axis=1).mean() / interval)
+    return {"nodes": int(len(points)), "min_distance_from_centre_m": float(r.min()), "speed_mean_m_s": speed,
             "nodes_inside": int((r < SPHERE_RADIUS).sum()), "z_min_m": float(points[:, 2].min()),
             "z_max_m": float(points[:, 2].max()), "nan": nan, "points": points, "triangles": np.asarray(triangles),
             "cloth_crossings": -1 if nan else cloth_crossings(points, np.asarray(triangles)),
@@ -344,7 +357,8 @@ def describe(row: dict) -> str:
             f"min r {row['min_distance_from_centre_m']:.4f} m, inside {row['nodes_inside']}, "
             f"crossings {row['cloth_crossings']}, "
             f"z {row['z_min_m']:.3f}..{row['z_max_m']:.3f} m, stretch {row['stretch_max']:.3f} "
-            f"({100 * row['stretched_share']:.2f} % over {100 * STRETCHED:.0f} %)")
+            f"({100 * row['stretched_share']:.2f} % over {100 * STRETCHED:.0f} %), "
+            f"mean speed {row['speed_mean_m_s']:.3f} m/s at the end")
 
 
 def report(rows: list[dict], out: Path) -> None:
@@ -354,8 +368,8 @@ def report(rows: list[dict], out: Path) -> None:
     implicit = {r["scene"]: r for r in rows if r["system"] == "party-implicit" and "points" in r}
     table = Table(title="party vs Blender vs Newton (2-core CPU unless stated)")
     for column in ("scene", "system", "s per sim s", "x party-implicit", "start-up s", "min r m", "inside", "crossings",
-                   "z range m", f"stretch max / >{100 * STRETCHED:.0f} %", "shape vs implicit mm (mean/max)",
-                   "equal outcome"):
+                   "z range m", f"stretch max / >{100 * STRETCHED:.0f} %", "mean speed m/s",
+                   "shape vs implicit mm (mean/max)", "equal outcome"):
         table.add_column(column)
     for r in rows:
         if "wall_per_simulated_second" in r:
@@ -373,9 +387,10 @@ def report(rows: list[dict], out: Path) -> None:
             table.add_row(r["scene"], r["system"], seconds_text(r, "wall_per_simulated_second"), f"{ratio:.2f}",
                           f"{r['startup_seconds']:.1f}", f"{r['min_distance_from_centre_m']:.4f}", str(r["nodes_inside"]),
                           str(r["cloth_crossings"]), f"{r['z_min_m']:.3f}..{r['z_max_m']:.3f}",
-                          f"{r['stretch_max']:.3f} / {100 * r['stretched_share']:.2f} %", shape, equal)
+                          f"{r['stretch_max']:.3f} / {100 * r['stretched_share']:.2f} %",
+                          f"{r['speed_mean_m_s']:.3f}", shape, equal)
         else:
-            table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "", "", "")
+            table.add_row(r["scene"], r["system"], describe(r), "", "", "", "", "", "", "", "", "", "")
     Console(width=200).print(table)
     for scene in dict.fromkeys(r["scene"] for r in rows):
         times = {r["system"]: r["wall_per_simulated_second"] for r in rows

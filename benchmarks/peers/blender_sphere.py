@@ -10,8 +10,8 @@ Blender keeps cloth its own distance plus the collision object's outer thickness
 (its default thickness, 0.02 m, held the cloth 19 mm off the sphere, where party's and Newton's
 rest about 3 mm off it), so the sphere gets Blender's thinnest, 1 mm, and the cloth 3 mm of
 its own and :data:`COLLISION_QUALITY` collision passes a step. Writes the final vertex positions
-[m], the set-up seconds and the simulation wall seconds to OUT.npz, with the grid's quads split
-into triangles.
+[m] and those a frame before (``points_before``, ``interval`` [s] earlier), the set-up seconds
+and the simulation wall seconds to OUT.npz, with the grid's quads split into triangles.
 """
 import json
 import math
@@ -102,14 +102,27 @@ modifier.collision_settings.use_self_collision = self_collision
 modifier.collision_settings.distance_min = DISTANCE - OUTER_THICKNESS
 modifier.collision_settings.self_distance_min = DISTANCE
 modifier.point_cache.frame_end = last
+
+
+def cloth_points() -> np.ndarray:
+    """The cloth's vertices at the current frame, in world space [m]."""
+    evaluated = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    return np.array([(evaluated.matrix_world @ v.co)[:] for v in evaluated.data.vertices])
+
+
 setup = time.perf_counter() - t0
 t = time.perf_counter()
+reading = 0.0
 for frame in range(1, last + 1):
     scene.frame_set(frame)
-wall = time.perf_counter() - t
+    if frame == last - 1:  # a frame before the end, for the final speed (its reading not timed)
+        read = time.perf_counter()
+        points_before = cloth_points()
+        reading = time.perf_counter() - read
+wall = time.perf_counter() - t - reading
+points = cloth_points()
 evaluated = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
-points = np.array([(evaluated.matrix_world @ v.co)[:] for v in evaluated.data.vertices])
 quads = np.array([tuple(p.vertices) for p in evaluated.data.polygons])
 triangles = np.r_[quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]
 np.savez(out, points=points, triangles=triangles, setup_seconds=setup, wall_seconds=wall,
-         simulated_seconds=(last - 1) / FPS)
+         simulated_seconds=(last - 1) / FPS, points_before=points_before, interval=1.0 / FPS)

@@ -7,7 +7,8 @@ A 1 m cloth of N x N particles 0.32 m above a static sphere (r = 0.3 m) at the o
 SECONDS at 60 frames per second, 10 substeps of 10 VBD iterations (Newton's cloth examples), in
 party's fabric (FABRIC_JSON: ``Fabric.to_dict()``, SI units) as far as Newton's isotropic
 membrane can carry it (:func:`newton_material`). The first frame (kernel compilation) is timed
-apart. Writes the final positions [m], the triangles, start-up and wall seconds to OUT.npz.
+apart. Writes the final positions [m] and those two frames before (``points_before``,
+``interval`` [s] earlier), the triangles, start-up and wall seconds to OUT.npz.
 """
 import json
 import sys
@@ -85,10 +86,15 @@ wp.synchronize()
 setup = time.perf_counter() - t0
 t = time.perf_counter()
 frames = round(fps * seconds)
-for _ in range(frames - 1):
+before = 2  # frames before the end, 1/30 s, for the final speed (the copy not timed)
+reading = 0.0
+for k in range(frames - 1):
+    if k == frames - 1 - before:
+        read = time.perf_counter()
+        points_before = states[0].particle_q.numpy().copy()
+        reading = time.perf_counter() - read
     frame()
 wp.synchronize()
-wall = (time.perf_counter() - t) * frames / (frames - 1)
+wall = (time.perf_counter() - t - reading) * frames / (frames - 1)
 np.savez(out, points=states[0].particle_q.numpy(), triangles=model.tri_indices.numpy(), setup_seconds=setup,
-         wall_seconds=wall,
-         simulated_seconds=frames / fps)
+         wall_seconds=wall, simulated_seconds=frames / fps, points_before=points_before, interval=before / fps)
