@@ -3,9 +3,9 @@ response of eqs. (8)-(12)."""
 
 import warp as wp
 
-from .geometry import (PUSH_SPENT, boxes_overlap, closest_point_barycentric, differs, friction_restitution_response,
+from .geometry import (PUSH_SPENT, closest_point_barycentric, differs, friction_restitution_response,
                        interpolate, step_box, step_within, unchanged)
-from .intervals import IntervalLists, first_visit, query_axis
+from .intervals import IntervalLists, found_once, query_axis
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
@@ -93,9 +93,7 @@ def gather_body_faces(
     for c in range(sel[1], sel[2] + 1):
         for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
             f = lists.ids[j]
-            if not boxes_overlap(lo, hi, lists.item_lo[f], lists.item_hi[f]):
-                continue
-            if not first_visit(lists, f, axis, sel[1], c):
+            if not found_once(lists, f, lo, hi, axis, sel[1], c):
                 continue
             if count < MAX_FACES:
                 faces_out[i, count] = f

@@ -6,7 +6,7 @@ import warp as wp
 
 from .geometry import (boxes_overlap, closest_point_barycentric, interpolate, step_box, step_near, triangle_step,
                        unchanged)
-from .intervals import IntervalLists, first_visit, query_axis
+from .intervals import IntervalLists, found_once, query_axis
 from .nearest import keep_nearest
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
@@ -196,10 +196,7 @@ def gather_cloth_triangles(
     for c in range(sel[1], sel[2] + 1):
         for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
             t = lists.ids[j]
-            # the box rejects most of the slab's entries, and costs less than first_visit's division
-            if not boxes_overlap(lo, hi, lists.item_lo[t], lists.item_hi[t]):
-                continue
-            if not first_visit(lists, t, axis, sel[1], c):
+            if not found_once(lists, t, lo, hi, axis, sel[1], c):
                 continue
             count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count, out, out_distance,
                                    overflow)
