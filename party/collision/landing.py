@@ -26,7 +26,7 @@ from .geometry import step_box
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
-LANDING_REACH = 0.5
+LANDING_REACH = 1.0
 """Largest distance, in units of the node's shortest edge (:func:`shortest_edge`), that a
 node near a body may move relative to it in one (sub)step."""
 
