@@ -25,30 +25,6 @@ def face_normal(f: int, faces: wp.array(dtype=int, ndim=2), body_q: wp.array(dty
 
 
 @wp.func
-def shell_contact(x0: wp.vec3, dr: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3, eps: float):
-    """Condition (6) for a node stepping ``dr`` [m] from ``x0`` relative to body triangle (a, b,
-    c): the share t of the step at which it comes within ``eps`` [m] of the triangle's plane
-    over the triangle (0 where it already lies within eps, or has been pushed up to eps
-    inside; 2 where the step does not), the plane distance s1 [m] at the step's end, and the
-    barycentric weights of the triangle's point nearest the node at t."""
-    nf = wp.normalize(wp.cross(b - a, c - a))
-    s0 = wp.dot(x0 - a, nf)
-    s1 = s0 + wp.dot(dr, nf)
-    if s0 < -eps or s1 >= eps:
-        return 2.0, s1, wp.vec3(0.0)
-    t = float(0.0)
-    if s0 > eps:
-        t = (s0 - eps) / (s0 - s1)
-    xt = x0 + dr * t
-    w = closest_point_barycentric(xt, a, b, c)
-    offset = xt - interpolate(w, a, b, c)
-    lateral = offset - wp.dot(offset, nf) * nf
-    if wp.length(lateral) > EDGE_TOLERANCE * eps:
-        return 2.0, s1, w
-    return t, s1, w
-
-
-@wp.func
 def still_covered(x: wp.vec3, v: wp.vec3, ref: wp.vec3, dt: float, margin: float) -> bool:
     """Whether a node at ``x`` stepping ``v dt`` stays within ``margin`` [m] of ``ref``, the
     place its candidates were searched from (``margin`` is half the search margin)."""
@@ -205,11 +181,9 @@ def collide_body(
     still end closer than eps to the triangle, the node's start is moved out along the face
     normal so that the step ends at eps (a position correction, adding no velocity). With
     ``arrive`` (ours, for large steps), a node that starts farther than eps from the triangle's
-    plane moves freely along its step until the step reaches eps, and with the new velocity
-    for the rest of the step (its start is moved so that eq. (4) ends it there); where its step
-    ends short of eps (the implicit solve's body plane held it there) it keeps the whole step.
-    As printed, the response leaves it where it started, up to a step's approach off the body,
-    and applies to the whole step.
+    plane is first moved along its normal to eps, where its step would have reached it, and
+    takes the new velocity from there; as printed, the response leaves it where it started, up
+    to a step's approach off the body.
 
     Skips a node left ``settled`` by the last pass and not ``touched`` by this one (see
     :meth:`~party.collision.pipeline.CollisionPipeline.apply`) and marks one it changes. The
@@ -240,10 +214,24 @@ def collide_body(
     best_w = wp.vec3(0.0)
     for j in range(candidate_count[i]):
         f = candidates[i, j]
+        a = body_q[faces[f, 0]]
+        b = body_q[faces[f, 1]]
+        cc = body_q[faces[f, 2]]
+        nf = wp.normalize(wp.cross(b - a, cc - a))
         vb = (body_qd[faces[f, 0]] + body_qd[faces[f, 1]] + body_qd[faces[f, 2]]) / 3.0
-        t, s1, w = shell_contact(x0, (vi - vb) * dt, body_q[faces[f, 0]], body_q[faces[f, 1]], body_q[faces[f, 2]],
-                                 eps)
-        if t > 1.0:
+        dr = (vi - vb) * dt
+        s0 = wp.dot(x0 - a, nf)
+        s1 = s0 + wp.dot(dr, nf)
+        if s0 < -eps or s1 >= eps:
+            continue
+        t = float(0.0)
+        if s0 > eps:
+            t = (s0 - eps) / (s0 - s1)
+        xt = x0 + dr * t
+        w = closest_point_barycentric(xt, a, b, cc)
+        offset = xt - interpolate(w, a, b, cc)
+        lateral = offset - wp.dot(offset, nf) * nf
+        if wp.length(lateral) > EDGE_TOLERANCE * eps:
             continue
         if t < best_t or (t == best_t and s1 < best_s1):
             best_t = t
@@ -264,18 +252,11 @@ def collide_body(
     if wp.dot(n, nf) <= 0.0:
         n = nf
     vbody = interpolate(best_w, body_qd[fa], body_qd[fb], body_qd[fc])
+    vnew = friction_restitution_response(v_given - vbody, n, friction[i], restitution[i], wp.dot(push, n)) + vbody
     s_start = wp.dot(x0 - a, nf)
-    vnew = friction_restitution_response(v_given - vbody, n, friction[i], restitution[i], wp.dot(push, n),
-                                         s_start > eps) + vbody
     if arrive == 1 and s_start > eps:
-        # free until the step reaches the shell (or all of it, where the solve's body plane
-        # held it off), the response for the rest: r + v dt ends at r + v_given dt t + vnew dt (1 - t)
-        approach = wp.dot(vbody - v_given, nf) * dt
-        t_arrive = float(1.0)
-        if approach > s_start - eps:
-            t_arrive = (s_start - eps) / approach
-        x0 = x0 + (v_given - vnew) * (dt * t_arrive)
-        s_start = wp.dot(x0 - a, nf)
+        x0 = x0 - (s_start - eps) * nf
+        s_start = eps
         x[i] = x0
         touched[i] = 1
     s_end = s_start + wp.dot(vnew - vbody, nf) * dt

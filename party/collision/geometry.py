@@ -92,19 +92,15 @@ def boxes_overlap(lo0: wp.vec3, hi0: wp.vec3, lo1: wp.vec3, hi1: wp.vec3) -> boo
 
 
 @wp.func
-def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: float, pressed: float,
-                                  struck: bool) -> wp.vec3:
+def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: float, pressed: float) -> wp.vec3:
     """Eqs. (8)-(11): the new relative velocity of a node striking a body.
 
     ``vr`` is the node's velocity relative to the body point, ``n`` the body normal there.
     Split vr into normal and tangential parts; inside the friction cone (|v_t| < mu |v_n|) the
     tangential part stops, outside it shrinks by mu |v_n|; the normal part reverses, scaled by
     the restitution sigma. Only approaching velocities (v . n < 0) change. ``pressed`` [m/s]
-    adds to |v_n| in the cone: the normal speed a body plane took from the node in the
-    implicit solve, which held it there (0 elsewhere). It adds to the bounce only where the
-    node ``struck`` the body within the step (it started off it: the plane was a landing
-    plane, and the node struck at |v_n| + pressed); a node resting on its plane is not
-    bounced by the weight the plane held.
+    adds to |v_n| in the cone (not to the bounce): the normal speed a body plane took from
+    the node in the implicit solve, which held it there (0 elsewhere).
     """
     un = wp.dot(vr, n)
     press = wp.max(-un, 0.0) + pressed
@@ -118,8 +114,6 @@ def friction_restitution_response(vr: wp.vec3, n: wp.vec3, mu: float, sigma: flo
         vt = wp.vec3(0.0)
     else:
         vt = vt * ((speed_t - limit) / speed_t)
-    if struck and pressed > 0.0:
-        return vt + sigma * press * n
     if un >= 0.0:
         return vt + vn
     return vt - sigma * vn

@@ -7,12 +7,8 @@ step, and friction on the pressure of the stretched cloth then holds the stretch
 sheet dropped at 1.7 cm a step onto the benchmark's sphere kept 236 of its 8,064 warp and
 weft elements beyond 9 % (the limit is 10 %) after 1 s at 1/150 s a step, 25 at 1/300 s and 1
 at 1/1,200 s. Cutting only the steps in which a node near the body would move farther than
-half its shortest edge relative to the body left 41 and 9, in 171 substeps for 150 steps and
-306 for 300. Since the implicit solve lands such nodes on body planes within the step
-(``landing_planes`` of :mod:`party.solvers.implicit.kernels`) and Collision() lets a node move
-freely until its step reaches the body (``CollisionSettings.arrive``), a reach of a whole
-edge (:data:`LANDING_REACH`) leaves none at 1/150 s, in 154 substeps (docs/design.md, the
-implicit solver).
+:data:`LANDING_REACH` of its shortest edge relative to the body left 41 and 9, in 171
+substeps for 150 steps and 306 for 300 (docs/design.md, the implicit solver).
 
 A node's motion over the step is taken at both ends of the step: its velocity at the start and
 that velocity plus what gravity adds over the step. Judged by the start alone, cloth at rest
@@ -30,12 +26,9 @@ from .geometry import step_box
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
-LANDING_REACH = 1.0
+LANDING_REACH = 0.5
 """Largest distance, in units of the node's shortest edge (:func:`shortest_edge`), that a
-node near a body may move relative to it in one (sub)step. (Half an edge before the landing
-planes: a 100 x 100 sheet dropped with self-collision at 1/150 s took 244 substeps for 150
-steps and kept 62 elements beyond 9 %; with them and a whole edge, 176 and 57, and 9.3 mm
-from the shape at 1/1,200 s on average against 10.9.)"""
+node near a body may move relative to it in one (sub)step."""
 
 MAX_LANDING_SUBSTEPS = 100
 """Most substeps a step is cut into for landing cloth; a step that would need more is refused

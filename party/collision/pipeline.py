@@ -79,13 +79,10 @@ class CollisionSettings:
             triangle between the cloth's nodes (only the vertices the cloth could come near are
             tested: :func:`~party.collision.body_vertices.vertices_to_test`); on with the
             implicit solver (:func:`party.solvers.select.large_step_collision`).
-        arrive: A node whose step reaches a body's thickness shell from outside moves freely
-            until it reaches the shell and takes the response for the rest of the step (ours:
-            :func:`party.collision.body.collide_body`); as printed, it stays where it started
-            and the response answers for its whole step. On with the implicit solver, whose
-            long steps left nodes stopped millimetres off the body as printed, and nodes stuck
-            where their steps began while their neighbours moved on, stretching the elements
-            between.
+        arrive: A node whose step reaches a body's thickness shell from outside is moved onto
+            the shell first and takes its response there (ours:
+            :func:`party.collision.body.collide_body`); as printed, it stays where it started.
+            On with the implicit solver, whose steps left nodes stopped millimetres off the body.
         exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
             (the node may not fold through its neighbours' triangles, which keeps sharp folds
             of a coarse net from crossing themselves); 1, also those holding one of its mesh

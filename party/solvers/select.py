@@ -31,9 +31,8 @@ def large_step_collision(collision: CollisionSettings | None) -> CollisionSettin
     """``collision`` for the implicit solver's large steps: with the crossing guard on, since
     they let more edges slip through each other, cloth triangles answering body vertices
     (:mod:`party.collision.body_vertices`), whose pushes the guard keeps from crossing layers,
-    and nodes reaching the body moved freely along their step onto its shell, the response
-    answering for the rest of the step (``arrive``), not left a step's approach off it. The
-    explicit solver keeps the paper's Collision() as printed."""
+    and nodes stopped at the body moved onto its shell (``arrive``), not left a step's approach
+    off it. The explicit solver keeps the paper's Collision() as printed."""
     return None if collision is None else replace(collision, crossing_guard=True, body_vertices=True, arrive=True)
 
 

@@ -3,8 +3,7 @@ target, body planes, and what the solve's result gives the next step."""
 
 import warp as wp
 
-from ...collision.body import shell_contact
-from ...collision.geometry import closest_point_barycentric, interpolate, step_box
+from ...collision.geometry import closest_point_barycentric, interpolate
 from .descent import DescentTerms, behind_plane, blend_node
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
@@ -85,26 +84,6 @@ def nearest_candidate(x: wp.vec3, f: int, faces: wp.array(dtype=int, ndim=2), bo
     return best
 
 
-@wp.func
-def face_plane(x: wp.vec3, f: int, faces: wp.array(dtype=int, ndim=2), body_q: wp.array(dtype=wp.vec3),
-               body_qd: wp.array(dtype=wp.vec3), eps: float, dt: float):
-    """The plane n . x >= level that keeps a node at ``x`` eps [m] off body face ``f`` over a
-    step of ``dt`` [s] (see :func:`body_planes`): n from the face's point p nearest ``x`` to
-    ``x`` (the face's normal where ``x`` lies over it or behind it), level = n . p + eps with p
-    moved by the body's velocity over the step; and the distance |x - p| [m]."""
-    a = body_q[faces[f, 0]]
-    b = body_q[faces[f, 1]]
-    c = body_q[faces[f, 2]]
-    w = closest_point_barycentric(x, a, b, c)
-    p = interpolate(w, a, b, c)
-    n = wp.normalize(wp.cross(b - a, c - a))
-    away = x - p
-    if wp.dot(away, n) > 0.0 and wp.length(away) > 0.0:
-        n = wp.normalize(away)
-    vb = interpolate(w, body_qd[faces[f, 0]], body_qd[faces[f, 1]], body_qd[faces[f, 2]])
-    return n, wp.dot(p + vb * dt, n) + eps, wp.length(away)
-
-
 @wp.kernel
 def body_planes(first: int, contact_face: wp.array(dtype=int), faces: wp.array(dtype=int, ndim=2),
                 body_q: wp.array(dtype=wp.vec3), body_qd: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3),
@@ -137,49 +116,23 @@ def body_planes(first: int, contact_face: wp.array(dtype=int), faces: wp.array(d
         offset[i] = 0.0
         return
     f = nearest_candidate(x[i], f, faces, body_q, candidates, candidate_count, i)
-    n, level, distance = face_plane(x[i], f, faces, body_q, body_qd, thickness[i], dt)
-    if distance > 2.0 * thickness[i]:
+    a = body_q[faces[f, 0]]
+    b = body_q[faces[f, 1]]
+    c = body_q[faces[f, 2]]
+    w = closest_point_barycentric(x[i], a, b, c)
+    p = interpolate(w, a, b, c)
+    n = wp.normalize(wp.cross(b - a, c - a))
+    away = x[i] - p
+    if wp.dot(away, n) > 0.0 and wp.length(away) > 0.0:
+        n = wp.normalize(away)
+    if wp.length(away) > 2.0 * thickness[i]:
         contact_face[i] = -1
         normal[i] = wp.vec3(0.0)
         offset[i] = 0.0
         return
+    vb = interpolate(w, body_qd[faces[f, 0]], body_qd[faces[f, 1]], body_qd[faces[f, 2]])
     normal[i] = n
-    offset[i] = level
-
-
-@wp.kernel
-def landing_planes(first: int, bvh: wp.uint64, faces: wp.array(dtype=int, ndim=2), body_q: wp.array(dtype=wp.vec3),
-                   body_qd: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3), y: wp.array(dtype=wp.vec3),
-                   inv_mass: wp.array(dtype=float), thickness: wp.array(dtype=float), dt: float,
-                   normal: wp.array(dtype=wp.vec3), offset: wp.array(dtype=float)):
-    """A body plane for this step (:func:`body_planes`' plane, of the face met) for each free
-    node without one whose inertial step ``y`` [m] would bring it within eps of a body face
-    (condition (6), :func:`~party.collision.body.shell_contact`, over the faces whose swept
-    boxes in ``bvh`` meet the step's box grown by eps). The solve then lands the node on the
-    body while its neighbours, coupled to it, follow within the step, instead of Collision()
-    stopping it after a solve that had moved them all on (ours; VBD puts its contacts in the
-    solve likewise)."""
-    i = first + wp.tid()
-    if inv_mass[i] == 0.0 or wp.length_sq(normal[i]) > 0.0:
-        return
-    x0 = x[i]
-    eps = thickness[i]
-    lo, hi = step_box(x0, y[i], eps)
-    query = wp.bvh_query_aabb(bvh, lo, hi)
-    f = int(0)
-    best_t = float(2.0)
-    best = int(-1)
-    while wp.bvh_query_next(query, f):
-        vb = (body_qd[faces[f, 0]] + body_qd[faces[f, 1]] + body_qd[faces[f, 2]]) / 3.0
-        t, s1, w = shell_contact(x0, y[i] - vb * dt, body_q[faces[f, 0]], body_q[faces[f, 1]], body_q[faces[f, 2]],
-                                 eps)
-        if t < best_t:
-            best_t = t
-            best = f
-    if best >= 0 and best_t <= 1.0:
-        n, level, distance = face_plane(x0, best, faces, body_q, body_qd, eps, dt)
-        normal[i] = n
-        offset[i] = level
+    offset[i] = wp.dot(p + vb * dt, n) + thickness[i]
 
 
 @wp.kernel

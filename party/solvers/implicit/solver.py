@@ -20,8 +20,8 @@ from ..hysteresis import slip_in_world
 from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
 from .descent import DESCENT, DescentTerms
 from .kernels import (body_planes, chebyshev_blend, contact_changes, contact_region, contact_resolve_start,
-                      contact_resolved_velocity, inertial_target, landing_planes, onto_planes, record_correction,
-                      spread_region, step_velocity)
+                      contact_resolved_velocity, inertial_target, onto_planes, record_correction, spread_region,
+                      step_velocity)
 
 
 SLIDER_STEP_RATIO = 600.0
@@ -342,11 +342,6 @@ class SolverImplicit:
                inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, self._f_ext, m.gravity,
                        control.kinematic_velocity, self._correction, self._plane_normal, dt],
                outputs=[self._y, self._d], device=dev)
-        if self._planes:
-            launch_items(landing_planes, 0, m.node_count,
-                         [self.collision.body_tree.id, m.collider_faces, state_in.collider_q, state_in.collider_qd,
-                          state_in.node_q, self._y, m.node_inv_mass, m.node_thickness, dt, self._plane_normal,
-                          self._plane_offset], dev)
         if self._sliding:
             launch(slip_in_world, dim=m.hinge_count,
                    inputs=[state_in.node_q, m.hinge_nodes, m.hinge_friction, state_in.hinge_slip, self._slip_world],
