@@ -21,4 +21,3 @@ def test_the_final_speed_of_a_sheet_still_in_free_fall_is_implicit_eulers():
     steps, last = round(0.2 / dt), round(LAST_INTERVAL / dt)
     assert row["nodes_inside"] == 0 and row["z_min_m"] > SPHERE_RADIUS
     assert row["speed_mean_m_s"] == pytest.approx(GRAVITY * dt * (steps - (last - 1) / 2), rel=1e-4)
-
