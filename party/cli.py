@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Optional
 
@@ -58,17 +59,24 @@ def run_command(
     resume: bool = typer.Option(False, "--resume",
                                 help="Continue from OUT/checkpoint.npz (the dress: and its sewing from OUT/sewn.npz)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Write into an --out folder that holds files party did "
+                                   "not write (they are kept; only party's own are replaced)."),
 ) -> None:
     """Run a scene and write its frames, images and summary.json."""
     import inspect
 
+    from .device import resolve
+    from .fabric import fabric_by_name
+    from .launch import thread_count
+    from .output.folder import check_output_path, open_output
     from .scenes import scene_by_name
     from .scenes.runner import run_scene
-
-    from .fabric import fabric_by_name
     from .solvers.select import check_solver
 
     build = scene_by_name(scene)
+    check_output_path(out_dir)
+    thread_count()
+    resolve(device)
     if self_collision is not None and self_collision not in ("on", "off"):
         raise InvalidInput(f"--self-collision must be on or off, got {self_collision!r}")
     options = {"duration": duration, "spacing": spacing, "dt": dt, "wind_speed": wind, "device": device,
@@ -82,9 +90,10 @@ def run_command(
         if value is not None and value is not False and name not in accepted and name != "progress":
             raise InvalidInput(f"scene {scene!r} has no option --{flags.get(name, name)}")
     _say_if_nothing_to_resume(resume, out_dir, "the run starts from its first frame")
-    kept = {"out": out_dir, "resume": resume} if "out" in accepted else {}  # a scene that keeps its set-up
-    built = build(**{k: v for k, v in options.items() if v is not None and k in accepted}, **kept)
-    summary = run_scene(built, out_dir, resume=resume, progress=progress)
+    with open_output(out_dir, "run", overwrite=overwrite, description=scene) as folder:
+        kept = {"out": folder.path, "resume": resume} if "out" in accepted else {}  # a scene that keeps its set-up
+        built = build(**{k: v for k, v in options.items() if v is not None and k in accepted}, **kept)
+        summary = run_scene(built, folder.path, resume=resume, progress=progress, folder=folder)
     out.print(f"{scene}: {summary['nodes']} nodes, {summary['steps']} steps, {summary['simulated_seconds']:.3f} s "
               f"simulated in {summary['wall_seconds']:.1f} s; max elongation {summary['max_elongation']:.4f}, "
               f"body penetrations {summary['body_penetrations']}, cloth crossings {summary['cloth_crossings']}")
@@ -114,21 +123,28 @@ def drape_command(
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show progress bars."),
     resume: bool = typer.Option(False, "--resume",
                                 help="Go on from OUT/checkpoint.npz (the sewing's last stage done, or the draping)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Write into an --out folder that holds files party did "
+                                   "not write (they are kept; only party's own are replaced)."),
 ) -> None:
     """Sew a pattern onto a body and drape it under gravity."""
+    from .device import resolve
     from .fabric import fabric_by_name
+    from .launch import thread_count
+    from .output.folder import check_output_path
     from .scenes.drape import drape
+    from .solvers.select import check_solver
 
     if not (spacing_mm > 0):
         raise InvalidInput(f"--spacing-mm must be positive, got {spacing_mm}")
-    from .solvers.select import check_solver
-
+    check_output_path(out_dir)
+    thread_count()
+    resolve(device)
     the_fabric = fabric_by_name(fabric)
     _say_if_nothing_to_resume(resume, out_dir, "the drape starts from the beginning")
     summary = drape(pattern, body, the_fabric, out_dir, spacing=spacing_mm / 1000.0, device=device,
                     solver=check_solver(solver),
                     pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,
-                    progress=progress, resume=resume)
+                    progress=progress, resume=resume, overwrite=overwrite)
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
               f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']} "
               f"(body vertices through the cloth {summary['body_vertices_through_cloth']}), "
@@ -153,6 +169,9 @@ def drape_command(
         out.print(f"at rest after {relaxation['draping_seconds']:g} s of draping" if relaxation["at_rest"] else
                   f"[yellow]still moving after {relaxation['draping_seconds']:g} s of draping[/]")
     out.print(f"results in {out_dir}/")
+    if not summary["quality"]["passed"]:
+        err.print(f"[bold yellow]warning:[/] the drape missed its quality gates: {'; '.join(summary['quality']['reasons'])}",
+                  highlight=False, soft_wrap=True)
 
 
 @app.command("validate")
@@ -166,10 +185,14 @@ def validate_command(
     quick: bool = typer.Option(False, "--quick", help="Coarse resolutions: the CI's run."),
     resume: bool = typer.Option(False, "--resume", help="Keep the cases OUT/results.json holds for the same fabric, "
                                 "solver and resolution; run the rest."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Write into an --out folder that holds files party did "
+                                   "not write (they are kept; only party's own are replaced)."),
 ) -> None:
     """Run the validation cases and print each quantity against its reference; exit status 1
     when any misses its tolerance. results.json is written after each case."""
     from .fabric import fabric_by_name
+    from .launch import thread_count
+    from .output.folder import check_output_path, open_output
     from .solvers.select import check_solver
     from .validate import case_names, run_validation
     from .validate.report import print_table, read_results, write_results
@@ -177,17 +200,21 @@ def validate_command(
     names = case_names(case)
     chosen = None if fabric is None else fabric_by_name(fabric)
     check_solver(solver)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / "results.json"
+    check_output_path(out_dir)
+    thread_count()
     settings = {"fabric": fabric, "fabric_properties": None if chosen is None else chosen.to_dict(), "solver": solver,
                 "quick": quick}
-    kept = read_results(path, settings) if resume else {}
-    with out.status("validating") as status:
-        results = run_validation(names, chosen, solver, out_dir, quick=quick, kept=kept,
-                                 on_case=lambda name: status.update(f"validating: {name}"),
-                                 on_result=lambda done: write_results(done, path, settings, complete=False))
-    print_table(results, out)
-    write_results(results, path, settings)
+    with open_output(out_dir, "validate", overwrite=overwrite, description=case or "all cases") as folder:
+        path = folder.path / "results.json"
+        kept = read_results(path, settings, warn=lambda line: err.print(f"[yellow]{line}[/]", highlight=False,
+                                                                        soft_wrap=True)) \
+            if resume else {}
+        with out.status("validating") as status:
+            results = run_validation(names, chosen, solver, folder.path, quick=quick, kept=kept,
+                                     on_case=lambda name: status.update(f"validating: {name}"),
+                                     on_result=lambda done: write_results(done, path, settings, complete=False))
+        print_table(results, out)
+        write_results(results, path, settings)
     failed = [c for r in results for c in r.checks if not c.passed]
     out.print(f"{sum(len(r.checks) for r in results) - len(failed)} of {sum(len(r.checks) for r in results)} checks "
               f"passed; results in {out_dir}/results.json")
@@ -196,7 +223,9 @@ def validate_command(
 
 
 def main() -> None:
-    """Entry point: user errors become one line on stderr and exit status 1."""
+    """Entry point: user errors become one line on stderr and exit status 1; so does any other
+    failure (out of memory, a full disk, a bug), whose traceback goes to a file the line names
+    (``PARTY_TRACEBACK=1`` shows it instead)."""
     try:
         status = app(standalone_mode=False)
     except PartyError as exc:
@@ -204,15 +233,39 @@ def main() -> None:
         raise SystemExit(1)
     except (typer.Abort, KeyboardInterrupt):
         status = INTERRUPTED
+    except MemoryError:
+        err.print("[bold red]error:[/] out of memory; try a coarser --spacing-mm (or --grid) or close other programs",
+                  highlight=False, soft_wrap=True)
+        raise SystemExit(1)
     except Exception as exc:
-        if not _is_usage_error(exc):
+        if _is_usage_error(exc):
+            exc.show()
+            raise SystemExit(exc.exit_code)
+        if os.environ.get("PARTY_TRACEBACK"):
             raise
-        exc.show()
-        raise SystemExit(exc.exit_code)
+        err.print(f"[bold red]error:[/] {_unexpected(exc)}", highlight=False, soft_wrap=True)
+        raise SystemExit(1)
     if status == INTERRUPTED:  # typer also turns Ctrl-C into Exit(130) itself
         err.print("interrupted; rerun with --resume to continue")
     if isinstance(status, int) and status:
         raise SystemExit(status)
+
+
+def _unexpected(exc: Exception) -> str:
+    """One line for a failure that is not a :class:`PartyError`: what the system said where it
+    is the system's (a full disk, a folder that went away), else a bug's name and the file its
+    traceback was written to."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f" ({exc.filename})" if exc.filename else ""
+        return f"{exc.strerror}{where}"
+    import tempfile
+    import traceback
+
+    path = Path(tempfile.gettempdir()) / f"party-traceback-{os.getpid()}.txt"
+    path.write_text("".join(traceback.format_exception(exc)))
+    first = (str(exc).splitlines() or [""])[0][:200]
+    return (f"internal error ({type(exc).__name__}: {first}); this is a bug in party, please report it with "
+            f"the traceback in {path}")
 
 
 def _is_usage_error(exc: Exception) -> bool:

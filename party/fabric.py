@@ -132,6 +132,24 @@ _KES = {
 }
 
 
+PHYSICAL_RANGES: dict[str, tuple[float, float, str]] = {
+    "areal_density": (0.005, 3.0, "kg/m^2"),
+    "tensile_warp": (1.0, 1.0e6, "N/m"),
+    "tensile_weft": (1.0, 1.0e6, "N/m"),
+    "damping": (0.0, 1.0e4, "kg/(m^2 s)"),
+    "thickness": (1.0e-4, 0.05, "m"),
+    "shear": (0.0, 1.0e5, "N/m"),
+    "bending_rigidity": (0.0, 1.0e-2, "N*m"),
+    "bending_hysteresis": (0.0, 1.0, "N*m/m"),
+    "strain_limit": (1.0e-3, math.inf, ""),
+    "friction": (0.0, 5.0, ""),
+}
+"""Ranges a fabric file's values must lie in (SI): wide enough for every real cloth, from tulle
+(some 10 g/m^2) to heavy leather and coated technical fabrics (tensile stiffness up to some
+1e5 N/m), so that a value outside is a slip of units or digits. Fabrics built in code
+(:meth:`Fabric.with_`) are not held to them."""
+
+
 def fabric_from_mapping(name: str, values: dict, *, origin: str = "fabric") -> Fabric:
     """A :class:`Fabric` from a table of the library's keys (SI, or KES where the key ends in
     ``_kes``); ``origin`` names the file in error messages."""
@@ -156,6 +174,11 @@ def fabric_from_mapping(name: str, values: dict, *, origin: str = "fabric") -> F
         if field in given:
             raise InvalidInput(f"{origin}: fabric {name!r} gives {field} twice (SI and KES)")
         given[field] = convert(float(value))
+        low, high, unit = PHYSICAL_RANGES.get(field, (-math.inf, math.inf, ""))
+        if not low <= given[field] <= high:
+            stated = "" if field == key else f" (from {key} = {value:g})"
+            raise InvalidInput(f"{origin}: fabric {name!r}: {field} = {given[field]:g} {unit}{stated} is outside "
+                               f"{low:g}-{high:g} {unit}, the range of real cloth")
     missing = [k for k in ("areal_density", "tensile_warp", "tensile_weft", "damping") if k not in given]
     if missing:
         raise InvalidInput(f"{origin}: fabric {name!r} lacks {', '.join(missing)}")

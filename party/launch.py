@@ -223,17 +223,20 @@ def worker_barrier(sync: WorkerSync, workers: int):
 
 
 def thread_count() -> int:
-    """Threads :func:`launch_items` uses on the CPU: ``$PARTY_THREADS``, else the cores this
-    process may use."""
+    """Threads :func:`launch_items` uses on the CPU: ``$PARTY_THREADS`` (a whole number from 1),
+    else the cores this process may use."""
     given = os.environ.get("PARTY_THREADS")
-    if given:
-        try:
-            return max(int(given), 1)
-        except ValueError:
-            from .errors import InvalidInput
+    if given is None or given.strip() == "":
+        return max(_CORES, 1)
+    try:
+        threads = int(given)
+    except ValueError:
+        threads = 0
+    if threads < 1:
+        from .errors import InvalidInput
 
-            raise InvalidInput(f"PARTY_THREADS must be a whole number, got {given!r}") from None
-    return max(_CORES, 1)
+        raise InvalidInput(f"PARTY_THREADS must be a whole number of threads from 1, got {given!r}")
+    return threads
 
 
 def launch_items(kernel: Any, first: int, count: int, inputs: Sequence[Any], device: Any) -> None:

@@ -47,8 +47,7 @@ def test_bad_run_options(tmp_path, args, message):
     (["--dt", "inf"], "error: time step must be positive and finite, got inf"),
 ])
 def test_every_scene_rejects_a_time_that_is_not_positive_and_finite_before_setting_up(tmp_path, scene, args, message):
-    quick = [] if scene == "rod-wind" else ["--quick"]  # rod-wind has no --quick
-    result = party("run", scene, *quick, "--out", str(tmp_path / "o"), "--no-progress", *args)
+    result = party("run", scene, "--quick", "--out", str(tmp_path / "o"), "--no-progress", *args)
     assert result.returncode == 1
     assert result.stderr.strip() == message
     assert not (tmp_path / "o").exists()

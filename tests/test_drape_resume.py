@@ -45,7 +45,7 @@ def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_pa
     flannel = fabric_by_name("wool_flannel")
     with pytest.raises(Stop):
         drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver=solver, images=False, progress=False)
-    assert sorted(p.name for p in out.iterdir()) == ["checkpoint.npz"]
+    assert sorted(p.name for p in out.iterdir()) == [".party", "checkpoint.npz"]
     with np.load(out / "checkpoint.npz") as saved:
         assert int(saved["draping_step"]) == saves[-1]
         sewing = int(saved["sewn_iterations"]) + int(saved["sewn_settling_iterations"])
@@ -128,4 +128,4 @@ def test_resuming_from_another_drapes_checkpoint_is_refused_in_one_line(tmp_path
     assert result.returncode == 1
     assert result.stderr.strip() == (f"error: {out / 'checkpoint.npz'} belongs to another drape (different fabric); "
                                      "remove it or drop --resume")
-    assert sorted(p.name for p in out.iterdir()) == ["checkpoint.npz"]
+    assert sorted(p.name for p in out.iterdir()) == [".party", "checkpoint.npz"]

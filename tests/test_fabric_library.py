@@ -44,7 +44,7 @@ def test_toml_and_json_files_give_the_same_fabric(tmp_path):
      "bad.toml: fabric 'bad' gives shear twice (SI and KES)"),
     ("areal_density = 'heavy'", "bad.toml: fabric 'bad': areal_density must be a number, got 'heavy'"),
     ("areal_density = -0.2\ntensile_warp = 1.0\ntensile_weft = 1.0\ndamping = 1.0",
-     "fabric 'bad': areal_density must be positive and finite, got -0.2"),
+     "bad.toml: fabric 'bad': areal_density = -0.2 kg/m^2 is outside 0.005-3 kg/m^2, the range of real cloth"),
     ("areal_density = [", "fabric file bad.toml is not valid TOML"),
 ])
 def test_bad_fabric_files(tmp_path, content, message):

@@ -57,7 +57,7 @@ def test_a_launch_shorter_than_a_handoff_stays_on_one_thread(monkeypatch):
 
 def test_a_bad_thread_count_is_one_line(monkeypatch):
     monkeypatch.setenv("PARTY_THREADS", "two")
-    with pytest.raises(InvalidInput, match="^PARTY_THREADS must be a whole number, got 'two'$"):
+    with pytest.raises(InvalidInput, match="^PARTY_THREADS must be a whole number of threads from 1, got 'two'$"):
         launch.thread_count()
 
 

@@ -31,10 +31,16 @@ def load_body(spec: str | Path, *, units: str | None = None, up: str | None = No
     """A preset dress form (``S``, ``M``, ``L``, or ``dress_form`` for M) or a mesh file."""
     name = str(spec)
     if name in SIZES or name == "dress_form":
+        for flag, value in (("--body-units", units), ("--up", up)):
+            if value is not None:
+                raise InvalidInput(f"{flag} applies to a body mesh file; {name} is party's dress form, whose units "
+                                   "and up axis are its own")
         return dress_form("M" if name == "dress_form" else name, arms=arms)
     path = Path(spec)
     if not path.exists():
         raise InvalidInput(f"{path}: body file not found (presets: {', '.join(SIZES)})")
+    if path.is_dir():
+        raise InvalidInput(f"{path} is a folder, not a body mesh file (expected one of {', '.join(FORMATS)})")
     if path.suffix.lower() not in FORMATS:
         raise InvalidInput(f"{path}: unknown body format {path.suffix or '(no suffix)'} "
                            f"(expected one of {', '.join(FORMATS)})")
@@ -60,7 +66,7 @@ def load_body(spec: str | Path, *, units: str | None = None, up: str | None = No
     scale = length_unit(units) if units else _detect_scale(stature, path)
     if not STATURE_RANGE[0] <= stature * scale <= STATURE_RANGE[1]:
         raise InvalidInput(f"{path}: the body is {stature * scale:.3g} m tall in {units or 'the detected units'}, "
-                           f"outside {STATURE_RANGE[0]}-{STATURE_RANGE[1]} m; check --units")
+                           f"outside {STATURE_RANGE[0]}-{STATURE_RANGE[1]} m; check --body-units and --up")
     rotation = UP_AXES[up]
     points = (vertices * scale) @ rotation.T
     collider = ColliderMesh(path.stem, points, faces)
@@ -78,4 +84,5 @@ def _detect_scale(stature: float, path: Path) -> float:
         s = length_unit(unit)
         if STATURE_RANGE[0] <= stature * s <= STATURE_RANGE[1]:
             return s
-    raise InvalidInput(f"{path}: cannot tell the units of a body {stature:.4g} units tall; pass --units")
+    raise InvalidInput(f"{path}: cannot tell the units of a body {stature:.4g} units tall (expected 1-2.5 m, "
+                       "100-250 cm or 1000-2500 mm); pass --body-units")

@@ -16,9 +16,13 @@ from scipy.spatial import cKDTree
 
 from .collider import ColliderMesh
 
+MAX_PAIRS = 2_000_000
+"""Most (vertex, neighbour) pairs held at once: the searches run over chunks of vertices sized
+to it, so that their memory is bounded whatever the reach (some 100 MB)."""
+
 
 def vertex_relief(collider: ColliderMesh, reach: float, *, enough: np.ndarray | float = np.inf,
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  max_pairs: int = MAX_PAIRS) -> tuple[np.ndarray, np.ndarray]:
     """Per vertex p with unit normal n_p, over the body's surface points q within ``reach`` [m]
     of p: the largest rise max (p - q) . n_p [m] (the exact maximum over each triangle cut by
     the ball: its corners inside, its edges' crossings of the sphere and the point of its plane's
@@ -27,7 +31,8 @@ def vertex_relief(collider: ColliderMesh, reach: float, *, enough: np.ndarray | 
 
     A vertex whose rise over the vertices alone reaches ``enough`` [m] (a scalar or one value
     per vertex) is reported with that rise, and with the cosine over those vertices' normals;
-    its triangles are not clipped: the caller only needs to know that it rises that far."""
+    its triangles are not clipped: the caller only needs to know that it rises that far. The
+    searches hold about ``max_pairs`` (vertex, neighbour) pairs at a time."""
     points = collider.vertices
     normals = collider.vertex_normals()
     count = len(points)
@@ -37,22 +42,35 @@ def vertex_relief(collider: ColliderMesh, reach: float, *, enough: np.ndarray | 
     tree = cKDTree(points)
     open_ = np.arange(count)
     for radius in (reach / 4.0, reach / 2.0, reach):  # most vertices of a body rise far enough early
-        near = cKDTree(points[open_]).sparse_distance_matrix(tree, radius, output_type="ndarray")
-        owner, other = open_[near["i"]], near["j"].astype(np.int64)
-        np.maximum.at(rise, owner, np.einsum("ij,ij->i", points[owner] - points[other], normals[owner]))
-        np.minimum.at(cosine, owner, np.einsum("ij,ij->i", normals[other], normals[owner]))
+        for chunk in _chunks(open_, points, tree, radius, max_pairs):
+            near = cKDTree(points[chunk]).sparse_distance_matrix(tree, radius, output_type="ndarray")
+            owner, other = chunk[near["i"]], near["j"].astype(np.int64)
+            np.maximum.at(rise, owner, np.einsum("ij,ij->i", points[owner] - points[other], normals[owner]))
+            np.minimum.at(cosine, owner, np.einsum("ij,ij->i", normals[other], normals[owner]))
         open_ = open_[rise[open_] < enough[open_]]
         if len(open_) == 0:
             return rise, cosine
     corners = points[collider.faces]
     face_normals = collider.face_normals_unnormalized()
     face_normals /= np.linalg.norm(face_normals, axis=1, keepdims=True)
-    vertex, face = _faces_near(points[open_], corners, reach)
-    vertex = open_[vertex]
-    height, cut = _lowest_in_ball(points[vertex], normals[vertex], corners[face], face_normals[face], reach)
-    np.maximum.at(rise, vertex[cut], height[cut])
-    np.minimum.at(cosine, vertex[cut], np.einsum("ij,ij->i", face_normals[face[cut]], normals[vertex[cut]]))
+    for chunk in _chunks(open_, points, tree, reach, max_pairs):
+        vertex, face = _faces_near(points[chunk], corners, reach)
+        vertex = chunk[vertex]
+        height, cut = _lowest_in_ball(points[vertex], normals[vertex], corners[face], face_normals[face], reach)
+        np.maximum.at(rise, vertex[cut], height[cut])
+        np.minimum.at(cosine, vertex[cut], np.einsum("ij,ij->i", face_normals[face[cut]], normals[vertex[cut]]))
     return rise, cosine
+
+
+def _chunks(chosen: np.ndarray, points: np.ndarray, tree: cKDTree, radius: float, max_pairs: int) -> list[np.ndarray]:
+    """``chosen`` (vertex indices) cut into chunks whose neighbours within ``radius`` number
+    about ``max_pairs`` at most, judged from the densest of a sample of the vertices."""
+    if len(chosen) == 0:
+        return []
+    sample = chosen[np.linspace(0, len(chosen) - 1, min(len(chosen), 64)).astype(np.int64)]
+    most = int(np.max(tree.query_ball_point(points[sample], radius, return_length=True)))
+    size = max(1, max_pairs // max(4 * most, 1))
+    return [chosen[k:k + size] for k in range(0, len(chosen), size)]
 
 
 def _faces_near(points: np.ndarray, corners: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:

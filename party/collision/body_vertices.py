@@ -44,6 +44,11 @@ RESTING = 1.01
 """A node within this many thicknesses of the plane of its contact face rests on the body (the
 body response leaves such a node at eps, to round-off)."""
 
+RELIEF_REACH = 0.1
+"""Largest reach [m] over which the body's relief is worth measuring: cloth whose triangles
+may stretch farther (a coarse net, a garment sewn far beyond its limit) could come near most
+vertices of a body anyway, and every one is tested."""
+
 MAX_VERTICES = 8
 """Body vertices remembered per cloth triangle between searches (the nearest ones)."""
 
@@ -79,6 +84,8 @@ def vertices_to_test(model: Model) -> np.ndarray:
     longest = float(np.sqrt(max((e1 * e1).sum(1).max(), (e2 * e2).sum(1).max(), ((e2 - e1) ** 2).sum(1).max())))
     eps = float(model.node_thickness.numpy().max())
     reach = longest * stretch + (1.0 + EDGE_TOLERANCE) * eps
+    if reach > RELIEF_REACH:
+        return every
     needed = []
     for collider in colliders:
         rise, cosine = vertex_relief(collider, reach, enough=(1.0 - GAP) * eps)

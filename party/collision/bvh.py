@@ -30,6 +30,10 @@ class TriangleBvh:
     def id(self) -> wp.uint64:
         return self.bvh.id
 
+    def forget(self) -> None:
+        """Drop the tree: the next :meth:`build` makes it anew from its boxes then."""
+        self.bvh = None
+
     def build(self, points: wp.array, velocities: wp.array, dt: float, margin: float) -> None:
         """Recompute the boxes and refit the tree (built on the first call)."""
         launch(_item_boxes, dim=self.count,

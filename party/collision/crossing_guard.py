@@ -316,6 +316,18 @@ class CrossingGuard:
         self.pending = 0
         self._primed = False
 
+    carried = ("crossed_before", "anchor", "pending", "_primed")
+    """What the next check reads of the last (:mod:`party.solvers.memory`): the edges crossing
+    then, where the nodes were, and the steps since."""
+
+    def forget_search(self) -> None:
+        """Drop the edge tree and the edges' lists, made anew at the next check
+        (:func:`party.solvers.memory.forget`: the tree's shape depends on the boxes it was
+        first built from, the lists' room on what they once had to hold)."""
+        self._edge_tree = None
+        self._listed = False
+        self.near = wp.zeros((self.edge_count, NEAR_ROOM), dtype=int, device=self.model.device)
+
     def prime(self, x: wp.array) -> None:
         """Record which edges cross at ``x`` (the state before the first step)."""
         self._check(x)

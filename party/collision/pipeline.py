@@ -256,6 +256,27 @@ class CollisionPipeline:
         self._cloth_searched = False
         return float(self.cloth_candidate_count.numpy().mean())
 
+    @property
+    def carried(self) -> tuple[str, ...]:
+        """What a step reads of the last (:mod:`party.solvers.memory`): the face each node was
+        last in contact with and the push the body gave it, and the body candidates, from which
+        the implicit solver's body planes start a step."""
+        return ("body_contact_face", "body_solve_push", "body_faces", "body_face_count") if self.has_body else ()
+
+    def forget_search(self) -> None:
+        """Drop the search structures and search the body and the cloth afresh at the next
+        Collision() (:func:`party.solvers.memory.forget`: a BVH's shape depends on the boxes it
+        was first built from)."""
+        self._cloth_searched = False
+        if self.has_body:
+            self._body_built = False
+            if self.bvh:
+                self.body_tree.forget()
+        if self.has_body_vertices:
+            self._vertex_tree = None
+        if self.has_cloth and self.bvh:
+            self.cloth_tree.forget()
+
     def apply(self, x: wp.array, v: wp.array, state: State, dt: float, *, continuing: bool = False,
               changed: wp.array | None = None) -> None:
         """Collision(): modify velocities ``v`` (and start positions ``x``) in place.

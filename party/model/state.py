@@ -30,6 +30,9 @@ class State:
     hinge_slip: wp.array
     time: float
 
+    carried = ("node_q", "node_qd", "collider_q", "collider_qd", "hinge_slip", "time")
+    """All of it (:mod:`party.solvers.memory`)."""
+
     def positions(self) -> np.ndarray:
         return self.node_q.numpy().astype(float)
 

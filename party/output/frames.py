@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from ..errors import InvalidInput
+
 
 def frame_path(out: Path, index: int) -> Path:
     """``out/frames/frame_000123.ply``: names sort in time order."""
@@ -42,5 +44,14 @@ def save_checkpoint(path: Path, **arrays) -> None:
 
 
 def load_checkpoint(path: Path) -> dict:
-    with np.load(path) as data:
-        return {k: data[k] for k in data.files}
+    """The arrays :func:`save_checkpoint` saved at ``path``; :class:`InvalidInput` where the file
+    is damaged (cut short by a full disk, say) or not a checkpoint at all."""
+    import zipfile
+
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {k: data[k] for k in data.files}
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as error:
+        reason = "not a NumPy archive" if isinstance(error, (zipfile.BadZipFile, ValueError)) else type(error).__name__
+        raise InvalidInput(f"{path} is damaged or not a party checkpoint ({reason}); remove it or drop --resume") \
+            from None

@@ -145,15 +145,18 @@ class Pattern:
             check_panel(panel)
         used: dict[EdgeRef, Seam] = {}
         for seam in self.seams:
+            if seam.a == seam.b:
+                raise InvalidInput(f"{seam} joins an edge to itself; a seam joins two different edges")
             for ref in (seam.a, seam.b):
                 if ref.panel not in self.panels:
                     raise InvalidInput(f"{seam}: unknown panel {ref.panel!r}")
-                self.panels[ref.panel].edge_index(ref.edge)
+                try:
+                    self.panels[ref.panel].edge_index(ref.edge)
+                except InvalidInput as error:
+                    raise InvalidInput(f"{seam}: {error}") from None
                 if ref in used:
                     raise InvalidInput(f"{seam}: edge {ref} is already sewn in {used[ref]}")
                 used[ref] = seam
-            if seam.a == seam.b:
-                raise InvalidInput(f"{seam}: an edge cannot be sewn to itself")
             la, lb = self.edge(seam.a).length(), self.edge(seam.b).length()
             if max(la, lb) > SEAM_LENGTH_RATIO * min(la, lb):
                 raise InvalidInput(f"{seam}: edge lengths {la * 100:.1f} cm and {lb * 100:.1f} cm differ by more "
@@ -180,10 +183,14 @@ def check_panel(panel: Panel) -> None:
     if grain.shape != (2,) or not np.all(np.isfinite(grain)) or np.hypot(*grain) < 1e-9:
         raise InvalidInput(f"{where}: missing or invalid grain line (a 2-D warp direction)")
     poly = panel.polygon()
+    outline = panel.outline()
+    flat = np.linalg.svd(outline - outline.mean(axis=0), compute_uv=False)[-1] < 1e-6
+    if flat or (poly.is_valid and poly.area < 1e-6):
+        raise InvalidInput(f"{where}: outline encloses no area ({poly.area * 1e4:.3g} cm^2): its vertices lie on "
+                           "a line or on top of each other")
     if not poly.is_valid:
-        raise InvalidInput(f"{where}: outline intersects itself ({shapely.is_valid_reason(poly)})")
-    if poly.area < 1e-6:
-        raise InvalidInput(f"{where}: outline encloses zero area ({poly.area * 1e4:.3g} cm^2)")
+        raise InvalidInput(f"{where}: outline crosses itself ({shapely.is_valid_reason(poly)}); check the order of "
+                           "its vertices")
     if panel.part is not None and panel.part not in PARTS:
         raise InvalidInput(f"{where}: unknown part {panel.part!r} (expected one of {', '.join(PARTS)})")
     if panel.anchor not in ANCHORS:

@@ -30,8 +30,6 @@ GarmentCode's flare dress). Output layout::
 
 from __future__ import annotations
 
-import shutil
-import tempfile
 import time
 from pathlib import Path
 from typing import Callable
@@ -44,10 +42,14 @@ from ..collision import CollisionSettings
 from ..errors import SimulationUnstable
 from ..fabric import Fabric
 from ..garment.assemble import assemble
+from ..garment.checks import check_placement, estimate_nodes
 from ..output.frames import write_json, write_mesh
+from ..output.folder import check_output_path, open_output
 from ..output.garment_export import write_garment
 from ..output.metrics import body_vertices_through, cloth_crossings, elements_beyond_limit, max_elongation
+from ..output.quality import drape_quality
 from ..pattern import load_pattern
+from ..resources import DRAPE_FOOTPRINT, check_memory
 from ..model import Model, State
 from ..solvers.relax import RelaxResult, SolverRelax, total_energy
 from ..solvers.select import guard_every
@@ -90,47 +92,83 @@ is written anyway, with ``at_rest`` false in its summary."""
 def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float = 0.02, device: str | None = None,
           pattern_units: str | None = None, body_units: str | None = None, up: str | None = None,
           seams_file: Path | None = None, sew_iterations: int = 6000, images: bool = True, progress: bool = True,
-          solver: str = "explicit", resume: bool = False) -> dict:
+          solver: str = "explicit", resume: bool = False, overwrite: bool = False) -> dict:
     """Drape ``pattern`` on ``body`` in ``fabric``; write results to ``out`` (see module docs).
-    Results are assembled in a temporary folder beside ``out`` and moved in at the end, so a
-    failed run leaves no half-written output, only ``out/checkpoint.npz``, which a run with
-    ``resume`` goes on from (the stages done not repeated; see :mod:`.drape_checkpoint`)."""
+
+    ``out`` is taken as party's output folder (:mod:`party.output.folder`: refused where it
+    holds files party did not write, unless ``overwrite``; locked while the drape runs). Every
+    input is read and checked before the folder is taken and any work is done. Results are
+    assembled in a staging folder inside ``out`` and moved in at the end, replacing only the
+    drape's own files, so a failed run leaves no half-written output, only
+    ``out/checkpoint.npz``, which a run with ``resume`` goes on from (the stages done not
+    repeated; see :mod:`.drape_checkpoint`)."""
     started = time.perf_counter()
+    check_output_path(Path(out))
     the_pattern = load_pattern(pattern, seams_file=seams_file, units=pattern_units)
     the_body = load_body(body, units=body_units, up=up)
-    garment = assemble(the_pattern, spacing)
+    check_placement(the_pattern, the_body, str(pattern))
+    nodes = estimate_nodes(the_pattern, spacing)
+    check_memory(DRAPE_FOOTPRINT, nodes, spacing)
     body_file = Path(body)
     inputs = {"pattern": str(Path(pattern).resolve()), "body": str(body_file.resolve()) if body_file.exists() else body,
               "fabric": fabric.to_dict(), "spacing_m": spacing, "solver": solver, "sew_iterations": sew_iterations,
               "pattern_units": pattern_units, "body_units": body_units, "up": up,
               "seams_file": None if seams_file is None else str(Path(seams_file).resolve())}
-    checkpoint = DrapeCheckpoint(Path(out) / "checkpoint.npz", inputs)
-    saved = checkpoint.load() if resume else None
-    wall = checkpoint.wall_clock(saved, started)
-    sewn = checkpoint.sew(saved, wall, garment, the_body, fabric, device=device, max_iterations=sew_iterations,
-                          progress=progress)
-    model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)
-    state = model.state()
-    first_step, energy = restore_draping(state, saved)
+    with open_output(out, "drape", overwrite=overwrite, description=Path(pattern).name) as folder:
+        if progress:
+            print(f"meshing {len(the_pattern.panels)} panels at {1000 * spacing:g} mm: about {nodes:,} nodes", flush=True)
+        garment = assemble(the_pattern, spacing)
+        checkpoint = DrapeCheckpoint(folder.path / "checkpoint.npz", inputs)
+        saved = checkpoint.load() if resume else None
+        wall = checkpoint.wall_clock(saved, started)
+        sewn = checkpoint.sew(saved, wall, garment, the_body, fabric, device=device, max_iterations=sew_iterations,
+                              progress=progress)
+        model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)
+        state = model.state()
+        first_step, energy = restore_draping(state, saved)
 
-    def save(step: int, log: list, state: State) -> None:
-        checkpoint.save_draping(state, step, log, wall())
+        def save(step: int, log: list, state: State) -> None:
+            checkpoint.save_draping(state, step, log, wall())
 
-    draped, energy = (_drape_to_rest if solver == "implicit" else _relax_kinetically)(
-        model, state, first_step, energy, save, progress)
-    points = draped.state.positions()
-    if not np.all(np.isfinite(points)):
-        raise SimulationUnstable("draping blew up (non-finite positions); try a coarser --spacing")
+        draped, energy = (_drape_to_rest if solver == "implicit" else _relax_kinetically)(
+            model, state, first_step, energy, save, progress)
+        points = draped.state.positions()
+        if not np.all(np.isfinite(points)):
+            raise SimulationUnstable("draping blew up (non-finite positions); try a coarser --spacing")
+        summary = _summary(pattern, body, fabric, solver, spacing, the_pattern, the_body, garment, sewn, model,
+                           points, draped, energy)
+        staging = folder.staging()
+        in_file = the_body.to_file_frame
+        write_garment(staging, "garment", in_file(points), model.triangles, garment.triangle_panel(), garment.corner_xy)
+        for c in the_body.colliders:
+            name = "body" if len(the_body.colliders) == 1 else f"body_{c.name}"
+            write_mesh(staging / f"{name}.obj", in_file(c.vertices), c.faces)
+        write_json(staging / "relaxation.json", {"sewing_energy_J": sewn.relaxation.energy,
+                                                 "draping_energy_J": energy})
+        if images:
+            _pictures(staging / "images", points, model.triangles, garment, the_body, sewn.relaxation.energy, energy)
+        summary["wall_seconds"] = round(wall(), 2)
+        write_json(staging / "summary.json", summary)
+        folder.publish(staging)
+    return summary
 
+
+def _summary(pattern, body, fabric: Fabric, solver: str, spacing: float, the_pattern, the_body, garment, sewn, model,
+             points: np.ndarray, draped: Settled, energy: list) -> dict:
+    """The drape's ``summary.json`` (see the module docstring), its quality gates included
+    (:func:`party.output.quality.drape_quality`)."""
     host = model.host
     limited = model.limited_elements
+    inside, distance = ColliderProbe(the_body.colliders, model.device).inside_and_distance(points)
     summary = {
         "pattern": str(pattern), "body": str(body), "fabric": fabric.name, "solver": solver, "spacing_m": spacing,
         "nodes": model.node_count, "triangles": model.triangle_count, "panels": len(the_pattern.panels),
         "seams": len(the_pattern.seams),
         "max_seam_gap_mm": round(1000.0 * sewn.max_seam_gap, 3),
         "seam_gaps_mm": {f"{s.a}-{s.b}": round(1000.0 * g, 3) for s, g in zip(the_pattern.seams, sewn.seam_gaps)},
-        "body_penetrations": ColliderProbe(the_body.colliders, model.device).penetrations(points),
+        "body_penetrations": int(inside.sum()),
+        "body_distance_mm": {"nearest": round(1000.0 * float(distance.min()), 3),
+                             "median": round(1000.0 * float(np.median(distance)), 3)},
         "cloth_crossings": cloth_crossings(points, model.triangles, model.device),
         "body_vertices_through_cloth": body_vertices_through(points, model.triangles, the_body.colliders,
                                                              device=model.device),
@@ -144,28 +182,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, *, spacing: float
         },
         "mesh_quality": garment.quality(),
     }
-
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    try:
-        in_file = the_body.to_file_frame
-        write_garment(staging, "garment", in_file(points), model.triangles, garment.triangle_panel(), garment.corner_xy)
-        for c in the_body.colliders:
-            name = "body" if len(the_body.colliders) == 1 else f"body_{c.name}"
-            write_mesh(staging / f"{name}.obj", in_file(c.vertices), c.faces)
-        write_json(staging / "relaxation.json", {"sewing_energy_J": sewn.relaxation.energy,
-                                                 "draping_energy_J": energy})
-        if images:
-            _pictures(staging / "images", points, model.triangles, garment, the_body, sewn.relaxation.energy, energy)
-        summary["wall_seconds"] = round(wall(), 2)
-        write_json(staging / "summary.json", summary)
-        if out.exists():
-            shutil.rmtree(out)
-        staging.rename(out)
-    finally:
-        if staging.exists():
-            shutil.rmtree(staging)
+    summary["quality"] = drape_quality(summary, fabric.thickness)
     return summary
 
 

@@ -56,11 +56,14 @@ class DrapeCheckpoint:
         naming the inputs that differ where it belongs to another drape."""
         if not self.path.exists():
             return None
+        saved = load_checkpoint(self.path)
         try:
-            saved = load_checkpoint(self.path)
             theirs = json.loads(str(saved["inputs"]))
-        except (OSError, ValueError, KeyError) as error:
-            raise InvalidInput(f"{self.path} is not a {self.run} checkpoint ({error}); remove it or drop --resume") from None
+            if not isinstance(theirs, dict):
+                raise ValueError("its inputs are not a record")
+        except (ValueError, KeyError):
+            raise InvalidInput(f"{self.path} is not a {self.run} checkpoint (it records no inputs); remove it or "
+                               "drop --resume") from None
         ours = json.loads(self.inputs)
         differing = sorted(k for k in ours.keys() | theirs.keys()  # as written: a NaN equals itself there
                            if json.dumps(ours.get(k), sort_keys=True) != json.dumps(theirs.get(k), sort_keys=True))

@@ -49,17 +49,18 @@ def pattern_path() -> Path:
     return Path(str(resources.files("party.data").joinpath("patterns", PATTERN)))
 
 
-def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None, device: str | None = None,
+def build(spacing: float | None = None, duration: float | None = None, dt: float | None = None, device: str | None = None,
           quick: bool = False, size: str = "M", progress: bool = False, solver: str = "explicit",
           fabric: Fabric | None = None, out: Path | None = None, resume: bool = False) -> Scene:
-    """The dress on dress form ``size``; ``quick`` coarsens everything for a fast check. ``dt``
-    [s] defaults to the solver's (the paper's 1e-4 s for the explicit one). With ``out`` the
+    """The dress on dress form ``size`` at ``spacing`` [m] (default 15 mm, with ``quick`` 30 mm) for
+    ``duration`` [s] (default 1.2, with ``quick`` 0.3); ``quick`` coarsens everything for a fast
+    check. ``dt`` [s] defaults to the solver's (the paper's 1e-4 s for the explicit one). With ``out`` the
     sewing is kept in ``out/sewn.npz``, and with ``resume`` taken from there (see the module
     docstring; one for another spacing, size, fabric or quickness is refused)."""
     dt = DEFAULT_DT[check_solver(solver)] if dt is None else dt
+    spacing = spacing if spacing is not None else 0.03 if quick else 0.015
+    duration = duration if duration is not None else 0.3 if quick else 1.2
     check_timing(duration, dt)
-    if quick:
-        spacing, duration = max(spacing, 0.03), min(duration, 0.3)
     fabric = fabric or wool_flannel()
     body = dress_form(size)
     garment = assemble(load_pattern(pattern_path()), spacing)
@@ -79,7 +80,7 @@ def build(spacing: float = 0.015, duration: float = 1.2, dt: float | None = None
                                                                                            guard_every=guard_every(dt))),
         dt=dt, duration=duration,
         frame_interval=WIREFRAME_EVERY * PAPER_DT / 2,
-        parameters={"spacing": spacing, "duration": duration, "dt": dt, "fabric": fabric.name, "body": body.name,
+        parameters={"spacing": spacing, "duration": duration, "dt": dt, "fabric": fabric.to_dict(), "body": body.name,
                     "quick": quick, "solver": solver},
         summary={"seams": len(garment.pattern.seams), "max_seam_gap_mm": round(1000 * sewn.max_seam_gap, 3),
                  "relaxation": {"iterations": sewn.relaxation.iterations + sewn.settling.iterations,

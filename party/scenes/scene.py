@@ -11,13 +11,26 @@ from ..errors import InvalidInput
 from ..model import Model
 
 
+WHOLE_STEPS = 1.0e-6
+"""Relative tolerance within which a duration counts as a whole number of steps."""
+
+
 def check_timing(duration: float, dt: float) -> None:
     """Reject a scene's simulated time ``duration`` [s] or time step ``dt`` [s] that is not
-    positive and finite, before any set-up work."""
+    positive and finite, or a duration that is not a whole number of steps (a run would
+    otherwise simulate another duration than the one asked for), before any set-up work."""
     if not 0 < duration < math.inf:
         raise InvalidInput(f"duration must be positive and finite, got {duration}")
     if not 0 < dt < math.inf:
         raise InvalidInput(f"time step must be positive and finite, got {dt}")
+    steps = duration / dt
+    if steps < 1.0 - WHOLE_STEPS:
+        raise InvalidInput(f"the duration {duration:g} s is shorter than one step of {dt:g} s; give a longer "
+                           "--duration or a smaller --dt")
+    if abs(steps - round(steps)) > WHOLE_STEPS * steps:
+        below, above = math.floor(steps) * dt, math.ceil(steps) * dt
+        raise InvalidInput(f"the duration {duration:g} s is not a whole number of steps of {dt:g} s "
+                           f"({steps:.4g} steps); give --duration {below:.6g} or {above:.6g}, or a --dt that divides it")
 
 
 @dataclass

@@ -24,14 +24,16 @@ DROP_HEIGHT = 0.62    # m, the cloth's plane above the sphere's centre
 FABRIC = "cotton"     # the library fabric the scene drops (the peers are given it too)
 
 
-def build(*, grid: int = 64, self_collision: bool = True, solver: str = "implicit", fabric: Fabric | str = FABRIC,
-          duration: float = 1.0, dt: float | None = None, device: str | None = None, quick: bool = False) -> Scene:
-    """The sphere-drop scene with ``grid`` x ``grid`` nodes; ``dt`` defaults to the solver's."""
+def build(*, grid: int | None = None, self_collision: bool = True, solver: str = "implicit",
+          fabric: Fabric | str = FABRIC, duration: float | None = None, dt: float | None = None,
+          device: str | None = None, quick: bool = False) -> Scene:
+    """The sphere-drop scene with ``grid`` x ``grid`` nodes (default 64, with ``quick`` 24) for
+    ``duration`` [s] (default 1, with ``quick`` 0.5); ``dt`` defaults to the solver's."""
     check_solver(solver)
     dt = DEFAULT_DT[solver] if dt is None else dt
+    grid = grid if grid is not None else 24 if quick else 64
+    duration = duration if duration is not None else 0.5 if quick else 1.0
     check_timing(duration, dt)
-    if quick:
-        grid, duration = min(grid, 24), min(duration, 0.5)
     if not 2 <= grid <= 1000:
         raise InvalidInput(f"--grid must lie in 2-1000 nodes per side, got {grid}")
     fabric = fabric_by_name(fabric) if isinstance(fabric, str) else fabric

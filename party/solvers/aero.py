@@ -109,6 +109,9 @@ class AirForces:
     """Computes the air force on every node for a step (launches only, except the periodic
     shielding update which refits a BVH)."""
 
+    carried = ("shield", "_steps")
+    """The shielding last computed and the steps counted towards the next (:mod:`party.solvers.memory`)."""
+
     def __init__(self, model, air: Air) -> None:
         self.model = model
         self.air = air

@@ -119,6 +119,12 @@ class StepEnd:
         self.guard = CrossingGuard(model, collision.guard_every) if guarded else None
         self.hysteresis = BendingHysteresis(model)
 
+    @property
+    def carried(self) -> tuple[str, ...]:
+        """The plastic limit's worklists' marks, counted on from step to step
+        (:mod:`party.solvers.memory`)."""
+        return ("_worklists.queued", "_worklists.epoch") if self._worklists is not None else ()
+
     def finish(self, state_in: State, state_out: State, dt: float) -> None:
         """``state_out`` holds r(t) and v*; leave r(t + dt) and v(t + dt) there."""
         m = self.model

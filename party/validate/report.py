@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Callable
 
 from ..output.frames import write_json
 from .checks import CaseResult, Check
@@ -72,20 +73,26 @@ def write_results(results: list[CaseResult], path: Path, settings: dict, complet
     write_json(path, document, default=_plain)
 
 
-def read_results(path: Path, settings: dict) -> dict[str, CaseResult]:
+def read_results(path: Path, settings: dict, warn: Callable[[str], None] = lambda line: None) -> dict[str, CaseResult]:
     """The cases ``results.json`` at ``path`` holds, by name, where it was written with the same
-    ``settings`` (fabric, solver, resolution; the cases asked for may differ); none otherwise."""
+    ``settings`` (fabric, solver, resolution; the cases asked for may differ); none otherwise.
+    A file that is not a validation record (unreadable, not JSON, another shape) keeps none,
+    and ``warn`` is told so in one line."""
+    if not path.exists():
+        return {}
     try:
         document = json.loads(path.read_text())
-    except (OSError, ValueError):
+        if json.dumps(document.get("settings"), sort_keys=True) != json.dumps(settings, sort_keys=True, default=_plain):
+            warn(f"{path} was written with other settings; running every case")
+            return {}  # compared as written: a NaN equals itself there
+        kept = {}
+        for case in document.get("cases", []):
+            checks = [Check(**{k: (math.nan if v is None else v) for k, v in c.items()}) for c in case["checks"]]
+            plots = [path.parent / p for p in case["plots"]]
+            kept[case["case"]] = CaseResult(case["case"], checks, plots, case["details"], case["wall_seconds"])
+    except (OSError, ValueError, TypeError, KeyError, AttributeError) as error:
+        warn(f"{path} is not a validation record ({type(error).__name__}); running every case")
         return {}
-    if json.dumps(document.get("settings"), sort_keys=True) != json.dumps(settings, sort_keys=True, default=_plain):
-        return {}  # compared as written: a NaN equals itself there
-    kept = {}
-    for case in document.get("cases", []):
-        checks = [Check(**{k: (math.nan if v is None else v) for k, v in c.items()}) for c in case["checks"]]
-        plots = [path.parent / p for p in case["plots"]]
-        kept[case["case"]] = CaseResult(case["case"], checks, plots, case["details"], case["wall_seconds"])
     return kept
 
 

@@ -105,6 +105,10 @@ class SolverImplicit:
             (static relaxation, :func:`~party.solvers.settle.settle`) take none.
     """
 
+    carried = ("_correction",)
+    """What the next step reads of the last (:mod:`party.solvers.memory`): the correction the
+    body gave the solve, which its inertial target starts from."""
+
     def __init__(self, model: Model, *, iterations: int = 10, chebyshev: float = 0.9,
                  collision: CollisionSettings | None = CollisionSettings(), air: Air | None = None,
                  plastic_passes: int = 32, kinetic_damping: tuple[float, float] | None = None,

@@ -1,0 +1,48 @@
+"""Quality gates: whether a drape's result is a garment worn on its body, said in its summary.
+
+A drape that misses a gate still writes its results; its ``summary.json`` holds ``quality``:
+``passed`` and ``reasons`` (one short line per gate missed), and ``party drape`` prints them in
+one warning line, so that no wrong result passes silently.
+"""
+
+from __future__ import annotations
+
+MAX_SEAM_GAP_MM = 2.0
+"""Largest distance [mm] between the two sides of a seam when they were joined."""
+
+MAX_ELONGATION = 1.3
+"""Largest length over rest length of any warp or weft element of the draped garment: beyond
+it the cloth holds stretch that the sewing or the collisions put in, not the pattern's fit."""
+
+OFF_BODY_MM = 10.0
+"""A garment whose nearest node is farther than this [mm] beyond the collision thickness from
+the body is not worn: a garment on a body rests on it somewhere."""
+
+HANGING_OFF_MM = 200.0
+"""A garment whose nodes lie farther than this [mm] from the body at the median is not worn
+either, though it may touch the body somewhere (a jumpsuit caught on a body lying on its side):
+worn garments keep half their cloth within a few centimetres of the body, a flared dress's
+skirt included (GarmentCode's samples: 10 to 44 mm)."""
+
+
+def drape_quality(summary: dict, thickness: float) -> dict:
+    """``{"passed": bool, "reasons": [str, ...]}`` for a drape's ``summary`` (see
+    :func:`party.scenes.drape.drape`); ``thickness`` [m] is the fabric's collision thickness."""
+    reasons = []
+    nearest, median = summary["body_distance_mm"]["nearest"], summary["body_distance_mm"]["median"]
+    if nearest > OFF_BODY_MM + 1000.0 * thickness:
+        reasons.append(f"not on the body: its nearest node is {nearest:.0f} mm from it")
+    elif median > HANGING_OFF_MM:
+        reasons.append(f"not on the body: half its nodes are more than {median:.0f} mm from it")
+    if summary["body_penetrations"]:
+        reasons.append(f"{summary['body_penetrations']} nodes inside the body")
+    if summary["cloth_crossings"]:
+        reasons.append(f"{summary['cloth_crossings']} cloth crossings")
+    if summary["max_seam_gap_mm"] > MAX_SEAM_GAP_MM:
+        seam, gap = max(summary["seam_gaps_mm"].items(), key=lambda item: item[1])
+        reasons.append(f"seam {seam} open {gap:.1f} mm")
+    if summary["max_elongation"] > MAX_ELONGATION:
+        reasons.append(f"stretched to {summary['max_elongation']:.2f} times rest (at most {MAX_ELONGATION})")
+    if not summary["relaxation"]["at_rest"]:
+        reasons.append("not at rest")
+    return {"passed": not reasons, "reasons": reasons}
