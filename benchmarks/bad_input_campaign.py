@@ -78,7 +78,8 @@ class Campaign:
         command = [sys.executable, "-m", "party.cli", *args]
         started = time.monotonic()
         child = subprocess.Popen(command, cwd=cwd or self.root, env={**os.environ, **(env or {})},
-                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # as a terminal
         peak = [0.0]
         killed = [""]
 
@@ -471,8 +472,16 @@ def _interrupted_run(k: Campaign, folder: str, sig: int) -> Outcome:
     _reference_run(k)
     outcome = k.party(RUN_48 + ["--out", f"o/{folder}"], interrupt=(sig, 0.0),
                       wait_for=k.out / folder / "frames" / "frame_000020.ply")
-    outcome.note = "checkpoint kept" if (k.out / folder / "checkpoint.npz").exists() else "no checkpoint"
+    outcome.note = _stopped(outcome, sig) + ("checkpoint kept" if (k.out / folder / "checkpoint.npz").exists()
+                                             else "no checkpoint")
     return outcome
+
+
+def _stopped(outcome: Outcome, sig: int) -> str:
+    """What a run sent ``sig`` did: stopped as it should, or finished first (the case then
+    tests nothing)."""
+    expected = 130 if sig == signal.SIGINT else -sig
+    return "" if outcome.status == expected else f"not stopped by the signal (exit {outcome.status}); "
 
 
 def _resumed_run(k: Campaign, folder: str) -> Outcome:
@@ -498,7 +507,7 @@ def _interrupted_drape(k: Campaign, folder: str, sig: int) -> Outcome:
     outcome = k.party(["drape", pattern("hoody_mean"), "--body", str(BODY), "--out", f"o/{folder}", "--spacing-mm", "40",
                        "--no-progress"], interrupt=(sig, 0.0), wait_for=k.out / folder / "checkpoint.npz")
     strays = [p.name for p in k.out.iterdir() if p.name.startswith(f".{folder}.")]
-    outcome.note = "no stray staging folder" if not strays else f"stray staging folders {strays}"
+    outcome.note = _stopped(outcome, sig) + ("no stray staging folder" if not strays else f"stray staging folders {strays}")
     return outcome
 
 
@@ -542,8 +551,8 @@ def _sigint_over_old(k: Campaign) -> Outcome:
     before = (k.out / "keep" / "garment.obj").read_bytes()
     outcome = k.party(["drape", pattern("tshirt_mean"), "--body", str(BODY), "--out", "o/keep", "--spacing-mm", "40",
                        "--no-progress"], interrupt=(signal.SIGINT, 0.0), wait_for=k.out / "keep" / "checkpoint.npz")
-    outcome.note = ("old results intact" if (k.out / "keep" / "garment.obj").read_bytes() == before
-                    else "DATA LOSS: old results replaced")
+    outcome.note = _stopped(outcome, signal.SIGINT) + (
+        "old results intact" if (k.out / "keep" / "garment.obj").read_bytes() == before else "DATA LOSS: old results replaced")
     return outcome
 
 
@@ -579,7 +588,7 @@ def _dress_sigint(k: Campaign) -> Outcome:
     outcome = k.party(["run", "dress", "--quick", "--out", "o/R_dress", "--no-progress"],
                       interrupt=(signal.SIGINT, 0.0), wait_for=k.out / "R_dress" / "checkpoint.npz")
     kept = [p for p in ("sewn.npz", "checkpoint.npz") if (k.out / "R_dress" / p).exists()]
-    outcome.note = f"kept {', '.join(kept)}" if kept else "nothing kept"
+    outcome.note = _stopped(outcome, signal.SIGINT) + (f"kept {', '.join(kept)}" if kept else "nothing kept")
     return outcome
 
 
