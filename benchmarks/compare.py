@@ -215,10 +215,11 @@ def party_sphere(solver: str, grid: int, self_collision: bool, seconds: float, d
     (compilation) apart, and its outcome (:func:`outcome`)."""
     import warp as wp
 
-    from party.scenes.sphere_drop import build
+    from party.scenes.sphere_drop import Settings, build
 
     started = time.perf_counter()
-    scene = build(grid=grid, self_collision=self_collision, solver=solver, duration=seconds, dt=dt, device=device)
+    scene = build(Settings(grid=grid, self_collision=self_collision, solver=solver, duration=seconds, dt=dt),
+                  device=device)
     state, scratch = scene.model.state(), scene.model.state()
     control = scene.model.control()
     steps = int(round(scene.duration / scene.dt))
@@ -304,11 +305,11 @@ def run_drape(pattern: Path, body: str, solver: str, spacing: float) -> dict:
     the outcome and the wall seconds in all (sewing, draping and output), and for GarmentCode's
     flare dress their ratio to GarmentCode's own time."""
     from party.fabric import wool_flannel
-    from party.scenes.drape import drape
+    from party.scenes.drape import DrapeSettings, drape
 
     with tempfile.TemporaryDirectory() as tmp:
-        summary = drape(pattern, body, wool_flannel(), Path(tmp) / "drape", spacing=spacing, images=False,
-                        progress=False, solver=solver, device="cpu")
+        summary = drape(pattern, body, wool_flannel(), Path(tmp) / "drape",
+                        DrapeSettings(spacing=spacing, images=False, progress=False, solver=solver, device="cpu"))
     row = {"wall_seconds_to_rest": summary["wall_seconds"], "at_rest": summary["relaxation"]["at_rest"],
            "nodes": summary["nodes"], "draping_steps": summary["relaxation"]["draping_steps"],
            "max_seam_gap_mm": summary["max_seam_gap_mm"], "body_penetrations": summary["body_penetrations"],

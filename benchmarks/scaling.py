@@ -34,7 +34,7 @@ from party.fabric import fabric_by_name
 from party.meshing import rectangular_net
 from party.model import Model, ModelBuilder
 from party.solvers.implicit import SolverImplicit
-from party.solvers.select import DEFAULT_DT, make_solver
+from party.solvers.registry import make_solver, solver_class
 
 
 def square_on_sphere(nodes: int, self_collision: bool,
@@ -50,7 +50,7 @@ def square_on_sphere(nodes: int, self_collision: bool,
     builder.add_collider(sphere(0.3, subdivisions=4))
     model = builder.finalize()
     solver = make_solver("implicit", model, collision=CollisionSettings(cloth=self_collision))
-    return model, solver, DEFAULT_DT["implicit"]
+    return model, solver, solver_class("implicit").default_dt
 
 
 def step_ms(nodes: int, steps: int, self_collision: bool,

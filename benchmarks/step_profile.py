@@ -145,8 +145,8 @@ def describe(solver, dt: float, steps: int, yields_before: int) -> None:
 
 
 def profile_sphere_drop(args: argparse.Namespace) -> None:
-    scene = sphere_drop.build(grid=args.grid, self_collision=args.self_collision == "on", solver=args.solver,
-                              duration=args.seconds, dt=args.dt)
+    scene = sphere_drop.build(sphere_drop.Settings(grid=args.grid, self_collision=args.self_collision == "on",
+                                                   solver=args.solver, duration=args.seconds, dt=args.dt))
     steps = max(1, round(scene.duration / scene.dt) - WARM_UP_STEPS)
     print(f"sphere drop, {args.grid}x{args.grid} nodes, self-collision {args.self_collision}, {args.solver} solver")
     run_steps(scene.model, scene.solver, scene.dt, steps, KernelClock())
@@ -163,8 +163,10 @@ def profile_square(args: argparse.Namespace) -> None:
 
 
 def profile_drape(args: argparse.Namespace) -> None:
-    import party.scenes.drape as drape_scene
+    from dataclasses import asdict
+
     from compare import garment_scenes, run_drape
+    from party.garment import draping
 
     scenes = {label.split()[0].lower(): (label.rsplit(", ", 1)[0], pattern, body)
               for label, pattern, body, _ in garment_scenes()}
@@ -174,37 +176,47 @@ def profile_drape(args: argparse.Namespace) -> None:
     name, pattern, body = scenes[key]
     label, spacing = f"{name}, {args.spacing_mm:g} mm", args.spacing_mm / 1000
     clock = KernelClock()
-    phase_name = "_drape_to_rest" if args.solver == "implicit" else "_relax_kinetically"
-    phase = getattr(drape_scene, phase_name)
     wall = {}
     guard = GuardLog()
-    checks = CheckLog(drape_scene, guard)
+    rows: list[tuple[float, float]] = []
+    method = draping.DRAPING[args.solver]
 
-    def draping(*a, **k):
-        guard.reset()  # the sewing's reverts are not the drape's
-        started = time.perf_counter()
-        with clock.running():
-            try:
-                return phase(*a, **k)
-            finally:
-                wall["draping"] = time.perf_counter() - started
+    class Profiled(type(method)):
+        """The solver's drape, its steps timed kernel by kernel and its shape checks logged."""
 
-    setattr(drape_scene, phase_name, draping)
+        def run(self, *a, **k):
+            guard.reset()  # the sewing's reverts are not the drape's
+            started = time.perf_counter()
+            with clock.running():
+                try:
+                    return super().run(*a, **k)
+                finally:
+                    wall["draping"] = time.perf_counter() - started
+
+        def steady(self, before, after):
+            import numpy as np
+
+            moved = 1000.0 * np.linalg.norm(after - before, axis=1)
+            rows.append((float(moved.mean()), float(np.percentile(moved, 99))))
+            guard.close()
+            return super().steady(before, after)
+
+    draping.DRAPING[args.solver] = Profiled(**asdict(method))
     try:
-        with clock.installed(), guard.installed(), checks.installed():
+        with clock.installed(), guard.installed():
             row = run_drape(pattern, body, args.solver, spacing)
     finally:
-        setattr(drape_scene, phase_name, phase)
+        draping.DRAPING[args.solver] = method
     print(f"{label}, {row['nodes']} nodes, {args.solver} solver: {row['wall_seconds_to_rest']:.1f} s in all, "
           f"draping {wall['draping']:.1f} s (the rest is sewing, set-up and output); at rest {row['at_rest']}, "
           f"{row['body_penetrations']} penetrations, {row['cloth_crossings']} crossings, "
           f"{row['body_vertices_through_cloth']} body vertices through the cloth")
     print("draping steps:")
     clock.report(wall["draping"], max(row["draping_steps"], 1))
-    if checks.rows:
+    if rows:
         print("draping, check by check (nodes' motion since the last check; the crossing guard's reverts):")
         print(f"{'check':>5} {'mean mm':>8} {'p99 mm':>7} {'steps reverting':>16} {'nodes reverted':>15}")
-        for k, ((mean, p99), (steps, nodes)) in enumerate(zip(checks.rows, guard.windows), start=1):
+        for k, ((mean, p99), (steps, nodes)) in enumerate(zip(rows, guard.windows), start=1):
             print(f"{k:5d} {mean:8.2f} {p99:7.2f} {steps:16d} {nodes:15d}")
 
 
@@ -240,35 +252,6 @@ class GuardLog:
             yield self
         finally:
             CrossingGuard.check = original
-
-
-class CheckLog:
-    """The implicit drape's shape checks (:func:`party.scenes.drape._shape_steady`): per check,
-    the nodes' mean and 99th-percentile motion [mm] since the last, in ``rows``; each check
-    closes ``guard``'s window."""
-
-    def __init__(self, drape_scene, guard: GuardLog) -> None:
-        self.scene = drape_scene
-        self.guard = guard
-        self.rows: list[tuple[float, float]] = []
-
-    @contextmanager
-    def installed(self) -> Iterator["CheckLog"]:
-        import numpy as np
-
-        original = self.scene._shape_steady
-
-        def steady(before, after):
-            moved = 1000.0 * np.linalg.norm(after - before, axis=1)
-            self.rows.append((float(moved.mean()), float(np.percentile(moved, 99))))
-            self.guard.close()
-            return original(before, after)
-
-        self.scene._shape_steady = steady
-        try:
-            yield self
-        finally:
-            self.scene._shape_steady = original
 
 
 def main() -> None:

@@ -27,8 +27,8 @@ def scenes_command() -> None:
     """List the scenes `party run` knows."""
     from .scenes import SCENES
 
-    for name, (_, description) in SCENES.items():
-        out.print(f"[bold]{name}[/]  {description}")
+    for name, entry in SCENES.items():
+        out.print(f"[bold]{name}[/]  {entry.description}")
 
 
 @app.command("fabrics")
@@ -63,7 +63,7 @@ def run_command(
                                    "not write (they are kept; only party's own are replaced)."),
 ) -> None:
     """Run a scene and write its frames, images and summary.json."""
-    import inspect
+    from dataclasses import fields
 
     from .device import resolve
     from .fabric import fabric_by_name
@@ -71,28 +71,27 @@ def run_command(
     from .output.folder import check_output_path, open_output
     from .scenes import scene_by_name
     from .scenes.runner import run_scene
-    from .solvers.select import check_solver
+    from .solvers.registry import check_solver
 
-    build = scene_by_name(scene)
+    entry = scene_by_name(scene)
     check_output_path(out_dir)
     thread_count()
     resolve(device)
     if self_collision is not None and self_collision not in ("on", "off"):
         raise InvalidInput(f"--self-collision must be on or off, got {self_collision!r}")
-    options = {"duration": duration, "spacing": spacing, "dt": dt, "wind_speed": wind, "device": device,
-               "grid": grid, "self_collision": None if self_collision is None else self_collision == "on",
+    options = {"duration": duration, "spacing": spacing, "dt": dt, "wind_speed": wind, "grid": grid,
+               "self_collision": None if self_collision is None else self_collision == "on",
                "solver": None if solver is None else check_solver(solver),
-               "fabric": None if fabric is None else fabric_by_name(fabric), "quick": quick or None,
-               "progress": progress}
-    accepted = inspect.signature(build).parameters
+               "fabric": None if fabric is None else fabric_by_name(fabric), "quick": quick or None}
+    accepted = {f.name for f in fields(entry.settings)}
     flags = {"wind_speed": "wind", "self_collision": "self-collision"}
     for name, value in options.items():
-        if value is not None and value is not False and name not in accepted and name != "progress":
+        if value is not None and name not in accepted:
             raise InvalidInput(f"scene {scene!r} has no option --{flags.get(name, name)}")
+    settings = entry.settings(**{k: v for k, v in options.items() if v is not None})
     _say_if_nothing_to_resume(resume, out_dir, "the run starts from its first frame")
     with open_output(out_dir, "run", overwrite=overwrite, description=scene) as folder:
-        kept = {"out": folder.path, "resume": resume} if "out" in accepted else {}  # a scene that keeps its set-up
-        built = build(**{k: v for k, v in options.items() if v is not None and k in accepted}, **kept)
+        built = entry.build(settings, device=device, out=folder.path, resume=resume, progress=progress)
         summary = run_scene(built, folder.path, resume=resume, progress=progress, folder=folder)
     out.print(f"{scene}: {summary['nodes']} nodes, {summary['steps']} steps, {summary['simulated_seconds']:.3f} s "
               f"simulated in {summary['wall_seconds']:.1f} s; max elongation {summary['max_elongation']:.4f}, "
@@ -131,8 +130,8 @@ def drape_command(
     from .fabric import fabric_by_name
     from .launch import thread_count
     from .output.folder import check_output_path
-    from .scenes.drape import drape
-    from .solvers.select import check_solver
+    from .scenes.drape import DrapeSettings, drape
+    from .solvers.registry import check_solver
 
     if not (spacing_mm > 0):
         raise InvalidInput(f"--spacing-mm must be positive, got {spacing_mm}")
@@ -141,10 +140,10 @@ def drape_command(
     resolve(device)
     the_fabric = fabric_by_name(fabric)
     _say_if_nothing_to_resume(resume, out_dir, "the drape starts from the beginning")
-    summary = drape(pattern, body, the_fabric, out_dir, spacing=spacing_mm / 1000.0, device=device,
-                    solver=check_solver(solver),
-                    pattern_units=units, body_units=body_units, up=up, seams_file=seams, images=images,
-                    progress=progress, resume=resume, overwrite=overwrite)
+    summary = drape(pattern, body, the_fabric, out_dir,
+                    DrapeSettings(spacing=spacing_mm / 1000.0, solver=check_solver(solver), device=device,
+                                  pattern_units=units, seams_file=seams, body_units=body_units, up=up, images=images,
+                                  progress=progress, resume=resume, overwrite=overwrite))
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
               f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']} "
               f"(body vertices through the cloth {summary['body_vertices_through_cloth']}), "
@@ -162,12 +161,8 @@ def drape_command(
         out.print(f"[yellow]open seam: {seam} was still {gap:.1f} mm apart when the sewing stopped, and the garment "
                   "was joined across it[/]", highlight=False)
     relaxation = summary["relaxation"]
-    if summary["solver"] == "explicit":
-        out.print(f"relaxed: energy settled in {relaxation['draping_steps']} iterations" if relaxation["at_rest"] else
-                  f"[yellow]relaxed: energy still changing after {relaxation['draping_steps']} iterations[/]")
-    else:
-        out.print(f"at rest after {relaxation['draping_seconds']:g} s of draping" if relaxation["at_rest"] else
-                  f"[yellow]still moving after {relaxation['draping_seconds']:g} s of draping[/]")
+    out.print(f"draped: at rest after {relaxation['draping_steps']} steps" if relaxation["at_rest"] else
+              f"[yellow]draped: still moving after {relaxation['draping_steps']} steps[/]")
     out.print(f"results in {out_dir}/")
     if not summary["quality"]["passed"]:
         err.print(f"[bold yellow]warning:[/] the drape missed its quality gates: {'; '.join(summary['quality']['reasons'])}",
@@ -193,7 +188,7 @@ def validate_command(
     from .fabric import fabric_by_name
     from .launch import thread_count
     from .output.folder import check_output_path, open_output
-    from .solvers.select import check_solver
+    from .solvers.registry import check_solver
     from .validate import case_names, run_validation
     from .validate.report import print_table, read_results, write_results
 

@@ -11,7 +11,7 @@ from party import device, launch
 if os.environ.get("PYTEST_XDIST_WORKER") and "PARTY_THREADS" not in os.environ:
     # pytest-xdist runs a test process per core: each keeps to its share of the cores, since
     # the implicit solver's workers spin at barriers (docs/design.md, Kernels and CPU threads)
-    os.environ["PARTY_THREADS"] = str(max(1, launch._CORES // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
+    os.environ["PARTY_THREADS"] = str(max(1, launch.CORES // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
 
 
 @pytest.fixture(scope="session", autouse=True)

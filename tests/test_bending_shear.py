@@ -117,7 +117,7 @@ def test_membrane_strip_stretches_and_narrows_as_st_venant_kirchhoff_says(poisso
     w sqrt(1 - 2 nu E11)."""
     from scipy.optimize import brentq
 
-    from party.solvers.relax import SolverRelax
+    from party.solvers.relax import StaticRelaxation
 
     fabric = library()["knit_jersey"].with_(membrane=True, poisson=poisson, tensile_weft=24.9, shear=10.0,
                                             strain_limit=float("inf"), bending_rigidity=0.0)
@@ -127,7 +127,7 @@ def test_membrane_strip_stretches_and_narrows_as_st_venant_kirchhoff_says(poisso
     b.pin(cloth.nodes(np.flatnonzero(net.uv[:, 0] == 0.0)))
     model = b.finalize("cpu")
     state = model.state()
-    result = SolverRelax(model, collision=None, momentum=0.9, solver="implicit").relax(
+    result = StaticRelaxation(model, collision=None, momentum=0.9, solver="implicit").relax(
         state, 1.0 / 300.0, max_iterations=4000, min_iterations=300, tolerance=1e-7)
     assert result.converged
     p = state.positions()

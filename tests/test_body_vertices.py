@@ -13,7 +13,7 @@ from party.fabric import wool_flannel
 from party.meshing import rectangular_net
 from party.model import ModelBuilder
 from party.solvers import SolverExplicit, SolverImplicit
-from party.solvers.select import DEFAULT_DT
+from party.solvers.registry import solver_class
 from conftest import simulate
 
 TIP = np.array([0.0, 0.0, 0.1])
@@ -47,7 +47,7 @@ def cloth_over_a_cone(body_vertices: bool, solver: str) -> tuple[list[float], fl
         p = state.positions()
         heights.append(min(height_over(p[t], TIP) for t in model.triangles) - TIP[2])
 
-    dt = DEFAULT_DT[solver] if solver == "implicit" else 1e-4
+    dt = solver_class(solver).default_dt
     simulate(model, stepper, int(round(0.2 / dt)), dt, every=1, callback=height)
     return heights, fabric.thickness
 
@@ -104,7 +104,7 @@ def test_a_body_vertex_buried_in_another_part_of_the_body_is_not_counted():
     assert body_vertices_through(sheet, net.triangles, [body]) == 0
 
 
-def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothing(monkeypatch):
+def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothing():
     """A 0.3 m cloth (2 cm net) falling 5 mm onto the cone's tip and sliding off it, 1 s of
     implicit steps, the body searched again only for the nodes (cloth triangles) that may have
     left the region searched for them: at each of a step's Collision()s (the first, and one to
@@ -115,7 +115,6 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
 
     from party.collision.body import MAX_FACES, gather_body_faces_bvh
     from party.collision.body_vertices import MAX_VERTICES, gather_body_vertices
-    from party.collision.pipeline import CollisionPipeline
     from party.solvers.implicit.solver import CONTACT_ROUNDS
 
     net = rectangular_net(0.3, 0.3, 0.02)
@@ -129,12 +128,12 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
     vertices, vertex_count = wp.zeros((t, MAX_VERTICES), dtype=int), wp.zeros(t, dtype=int)
     distance, overflow = wp.zeros((t, MAX_VERTICES), dtype=float), wp.zeros(1, dtype=int)
     counts = {"searched": 0, "possible": 0, "needed": 0, "missing": 0, "continuing": 0}
-    search_body = CollisionPipeline._search_body
+    references = [solver.collision._body_ref.numpy().copy()]  # where each node was last searched from
 
     def checked(self, x, v, state, dt, continuing):
-        before = self._body_ref.numpy().copy()
-        search_body(self, x, v, state, dt, continuing)
-        counts["searched"] += int(np.any(self._body_ref.numpy() != before, axis=1).sum())
+        before, now = references[-1], self._body_ref.numpy().copy()
+        references.append(now)
+        counts["searched"] += int(np.any(now != before, axis=1).sum())
         counts["possible"] += n
         counts["continuing"] += int(continuing)
         unused = wp.zeros(n, dtype=int)
@@ -157,8 +156,8 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
                 counts["needed"] += len(need)
                 counts["missing"] += len(need - set(held[k, :held_count[k]].tolist()))
 
-    monkeypatch.setattr(CollisionPipeline, "_search_body", checked)
-    state = simulate(model, solver, 300, DEFAULT_DT["implicit"])
+    solver.collision.after_body_search = checked
+    state = simulate(model, solver, 300, solver_class("implicit").default_dt)
     assert state.positions()[:, 2].min() < 0.05  # it slid off the tip
     assert overflow.numpy()[0] == 0
     assert counts["needed"] > 1000 and counts["missing"] == 0

@@ -110,7 +110,12 @@ def test_blow_up_stops_with_advice_and_keeps_frames(tmp_path):
     assert explicit.critical_time_step() < 1e-4  # the damped limit would refuse this dt
 
     class NoStatedLimit:
+        name = "unstated"
         step = explicit.step
+        flush = explicit.flush
+
+        def stable_time_step(self) -> float:
+            return float("inf")
 
     scene = Scene("blow-up", model, NoStatedLimit(), dt=1e-4, duration=0.1, frame_interval=0.002)
     with pytest.raises(SimulationUnstable, match=r"simulation became unstable .* try a smaller --dt, e.g. 5e-05"):
@@ -121,11 +126,11 @@ def test_blow_up_stops_with_advice_and_keeps_frames(tmp_path):
 
 
 def test_resume_continues_where_it_stopped(tmp_path):
-    from party.scenes.rod_wind import build
+    from party.scenes.rod_wind import Settings, build
 
-    first = run_scene(build(spacing=0.05, duration=0.02, frame_interval=0.01), tmp_path, progress=False)
-    resumed = run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path, resume=True, progress=False)
-    run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path / "fresh", progress=False)
+    first = run_scene(build(Settings(spacing=0.05, duration=0.02, frame_interval=0.01)), tmp_path, progress=False)
+    resumed = run_scene(build(Settings(spacing=0.05, duration=0.04, frame_interval=0.01)), tmp_path, resume=True, progress=False)
+    run_scene(build(Settings(spacing=0.05, duration=0.04, frame_interval=0.01)), tmp_path / "fresh", progress=False)
     assert first["steps"] == 200 and resumed["steps"] == 400
     import trimesh
 
@@ -148,13 +153,13 @@ def test_a_duration_within_a_frame_ends_the_run_there(tmp_path):
     """The run simulates its duration in whole steps, its last frame shorter where the
     duration ends within it (0.025 s of 1e-4 s steps in frames of 0.01 s: 250 steps, frames at
     0, 0.01, 0.02 and 0.025 s); resumed for 0.04 s, it goes on from 0.025 s to 0.04 s."""
-    from party.scenes.rod_wind import build
+    from party.scenes.rod_wind import Settings, build
 
-    summary = run_scene(build(spacing=0.05, duration=0.025, frame_interval=0.01), tmp_path, progress=False)
+    summary = run_scene(build(Settings(spacing=0.05, duration=0.025, frame_interval=0.01)), tmp_path, progress=False)
     assert summary["steps"] == 250 and summary["simulated_seconds"] == pytest.approx(0.025)
     assert summary["frames"] == 4
     assert sorted(p.name for p in (tmp_path / "frames").iterdir())[-1] == "frame_000003.ply"
-    resumed = run_scene(build(spacing=0.05, duration=0.04, frame_interval=0.01), tmp_path, resume=True,
+    resumed = run_scene(build(Settings(spacing=0.05, duration=0.04, frame_interval=0.01)), tmp_path, resume=True,
                         progress=False)
     assert resumed["steps"] == 400 and resumed["frames"] == 5
     with np.load(tmp_path / "checkpoint.npz") as saved:

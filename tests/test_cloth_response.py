@@ -12,7 +12,7 @@ from party.meshing import rectangular_net
 from party.model import ModelBuilder
 from party.output.metrics import body_penetrations, cloth_crossings, collider_inside_and_distance
 from party.solvers import SolverExplicit
-from party.solvers.select import DEFAULT_DT, make_solver
+from party.solvers.registry import make_solver, solver_class
 from conftest import simulate
 
 DT = 1.0e-4
@@ -55,12 +55,12 @@ def test_exchange_is_taken_in_the_struck_points_frame():
 
 
 def test_free_exchange_stops_the_approach_and_keeps_the_sliding():
-    """gamma = kappa = 1 (the sewing's settling, ``SETTLING_EXCHANGE``): eqs. (13)-(14) change
+    """gamma = kappa = 1 (the sewing's settling, ``SewingSettings().exchange``): eqs. (13)-(14) change
     nothing, and the approach left is stopped along the normal, momentum kept; the sliding stays."""
-    from party.scenes.garment_sim import SETTLING_EXCHANGE
+    from party.garment.sewing import SewingSettings
 
     v0 = np.array([0.0, 3.0, -20.0])
-    v, hitter, mass = node_hits_triangle_vertex(v0, gamma=SETTLING_EXCHANGE[0], kappa=SETTLING_EXCHANGE[1])
+    v, hitter, mass = node_hits_triangle_vertex(v0, gamma=SewingSettings().exchange[0], kappa=SewingSettings().exchange[1])
     assert v[hitter][2] == pytest.approx(v[0][2], abs=1e-5)  # no approach left
     assert mass[hitter] * v[hitter][2] + mass[0] * v[0][2] == pytest.approx(mass[hitter] * v0[2], rel=1e-5)
     assert v[hitter][:2] == pytest.approx(v0[:2], abs=1e-5) and np.allclose(v[0][:2], 0.0, atol=1e-6)
@@ -179,8 +179,7 @@ def test_a_net_finer_than_its_thickness_does_not_push_itself_apart(solver_name, 
     triangles lie within the thickness of each node, but no cloth could fold back that
     close, so none is a contact and no node moves (it moved 1.3 and 3 mm in three implicit
     steps when they were)."""
-    from party.solvers.select import make_solver
-    from party.solvers.settle import dynamics_time_step
+    from party.solvers.registry import solver_class
 
     fabric = wool_flannel()
     assert fabric.thickness == 0.003
@@ -191,7 +190,7 @@ def test_a_net_finer_than_its_thickness_does_not_push_itself_apart(solver_name, 
     model = b.finalize("cpu")
     solver = make_solver(solver_name, model)
     state, scratch, control = model.state(), model.state(), model.control()
-    dt = dynamics_time_step(model, solver_name)  # the explicit one below its stability limit
+    dt = solver_class(solver_name).dynamics_step(model)  # the explicit one below its stability limit
     for _ in range(3 if solver_name == "implicit" else 30):
         solver.step(state, scratch, control, dt)
         state, scratch = scratch, state
@@ -199,35 +198,23 @@ def test_a_net_finer_than_its_thickness_does_not_push_itself_apart(solver_name, 
     assert np.abs(state.positions() - flat).max() < 1e-6
 
 
-@wp.kernel
-def close_pass_settling_nothing(touched: wp.array(dtype=int), settled: wp.array(dtype=int),
-                                changed: wp.array(dtype=int)):
-    i = wp.tid()
-    settled[i] = 0
-    if (touched[i] & 1) != 0:
-        wp.atomic_add(changed, 0, 1)
-    touched[i] = 0
-
-
 @pytest.mark.parametrize("solver_name,passes", [("explicit", 4), ("implicit", 4), ("implicit", 2)])
-def test_passes_leaving_out_what_the_last_pass_left_as_it_was_end_bit_for_bit_as_full_passes(monkeypatch,
-                                                                                              solver_name, passes):
+def test_passes_leaving_out_what_the_last_pass_left_as_it_was_end_bit_for_bit_as_full_passes(solver_name, passes):
     """Three layers pushed onto a box (body, body vertices and cloth responses in 4 passes, or
     in 2, so that a Collision() may end with passes that still changed nodes, which the
     implicit solver's second Collision() of the step then takes over): the passes that skip
     settled nodes, triangles and contacts end every step exactly where passes over everything
     do."""
     model, velocity = stacked_cloths(3, 1.0, box((0.1, 0.1, 0.08), center=(0, 0, 0.0)))
-    dt = DT if solver_name == "explicit" else DEFAULT_DT["implicit"]
+    dt = DT if solver_name == "explicit" else solver_class("implicit").default_dt
     steps = 600 if solver_name == "explicit" else 60
 
-    def run() -> np.ndarray:
-        return stepped(make_solver(solver_name, model, collision=CollisionSettings(passes=passes)), model, velocity,
-                       dt, steps)
+    def run(skip_settled: bool) -> np.ndarray:
+        collision = CollisionSettings(passes=passes, skip_settled=skip_settled)
+        return stepped(make_solver(solver_name, model, collision=collision), model, velocity, dt, steps)
 
-    skipping = run()
-    monkeypatch.setattr(pipeline, "close_pass", close_pass_settling_nothing)
-    full = run()
+    skipping = run(True)
+    full = run(False)
     assert np.array_equal(skipping, full)
     assert np.abs(np.diff(full[:, :model.node_count, 2], axis=0)).max() > 1e-4  # the layers move
 
@@ -395,7 +382,7 @@ def test_the_cloth_search_margin_changes_how_often_the_cloth_is_searched_not_whe
     differ: the implicit solver's 1/300 s steps sweep large boxes, and at 1 m/s or with 4 mm some
     were.)"""
     model, velocity = stacked_cloths(3, push, box((0.1, 0.1, 0.08), center=(0, 0, 0.0)))
-    dt = DT if solver_name == "explicit" else DEFAULT_DT["implicit"]
+    dt = DT if solver_name == "explicit" else solver_class("implicit").default_dt
 
     def run(margin: float) -> tuple[np.ndarray, int]:
         solver = make_solver(solver_name, model, collision=CollisionSettings(passes=4, cloth_search_margin=margin))

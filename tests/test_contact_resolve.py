@@ -8,7 +8,7 @@ from party.fabric import wool_flannel
 from party.meshing import rectangular_net
 from party.model import ModelBuilder
 from party.output.metrics import max_elongation
-from party.solvers.select import make_solver
+from party.solvers.registry import make_solver
 
 SHEET, SPACING, PATCH = 0.3, 0.02, 0.04
 DT = 1.0 / 100.0
@@ -37,7 +37,7 @@ def one_step(resolve: bool):
     model, state, sheet_nodes = sheet_over_patch()
     solver = make_solver("implicit", model, collision=CollisionSettings())
     if not resolve:
-        solver.end.contact_resolve = None
+        solver.filters.contact_resolve = None
     out = model.state()
     solver.step(state, out, model.control(), DT)
     p = out.positions()

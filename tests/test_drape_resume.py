@@ -2,6 +2,7 @@
 
 import json
 import signal
+from dataclasses import replace
 import subprocess
 import sys
 from pathlib import Path
@@ -14,8 +15,9 @@ from party.body.load import load_body
 from party.fabric import fabric_by_name
 from party.garment.assemble import assemble
 from party.pattern import load_pattern
+from party.garment import sewing
 from party.scenes import drape as drape_module
-from party.scenes import drape_checkpoint, garment_sim
+from party.scenes.drape import DrapeSettings
 
 DRESS = Path(drape_module.__file__).parents[1] / "data" / "patterns" / "dress_sleeves.json"
 SPACING = 0.03
@@ -26,35 +28,33 @@ class Stop(Exception):
 
 
 @pytest.mark.parametrize("solver", ["explicit", "implicit"])
-def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_path, monkeypatch, solver):
+def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_path, solver):
     """Stopped after its second save while draping, the drape leaves only its checkpoint; resumed,
     it does not sew again, goes on from the saved step to rest, with nothing through the body or
     itself, and counts the sewing it did before."""
     out = tmp_path / "out"
-    monkeypatch.setattr(drape_checkpoint, "SAVE_SECONDS", 0.0)
-    save = drape_checkpoint.DrapeCheckpoint.save_draping
+    settings = DrapeSettings(spacing=SPACING, solver=solver, images=False, progress=False, checkpoint_seconds=0.0)
     saves = []
 
-    def save_then_stop(self, state, step, energy, wall_seconds):
-        save(self, state, step, energy, wall_seconds)
-        saves.append(step)
-        if len(saves) == 2:
-            raise Stop
+    def stop_after_two(stage, step):
+        if stage == "draping":
+            saves.append(step)
+            if len(saves) == 2:
+                raise Stop
 
-    monkeypatch.setattr(drape_checkpoint.DrapeCheckpoint, "save_draping", save_then_stop)
     flannel = fabric_by_name("wool_flannel")
     with pytest.raises(Stop):
-        drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver=solver, images=False, progress=False)
+        drape_module.drape(DRESS, "M", flannel, out, settings, on_save=stop_after_two)
     assert sorted(p.name for p in out.iterdir()) == [".party", "checkpoint.npz"]
     with np.load(out / "checkpoint.npz") as saved:
         assert int(saved["draping_step"]) == saves[-1]
         sewing = int(saved["sewn_iterations"]) + int(saved["sewn_settling_iterations"])
         earlier = float(saved["wall_seconds"])
 
-    monkeypatch.setattr(drape_checkpoint.DrapeCheckpoint, "save_draping", save)
-    monkeypatch.setattr(drape_checkpoint, "sew", lambda *args, **kwargs: pytest.fail("sewed again"))
-    summary = drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver=solver, images=False,
-                                 progress=False, resume=True)
+    stages = []
+    summary = drape_module.drape(DRESS, "M", flannel, out, replace(settings, resume=True),
+                                 on_save=lambda stage, step: stages.append(stage))
+    assert set(stages) == {"draping"}  # not sewn again
     relaxation = summary["relaxation"]
     assert relaxation["at_rest"] and relaxation["draping_steps"] > saves[-1]
     assert relaxation["sewing_iterations"] == sewing
@@ -67,28 +67,26 @@ def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_pa
     assert logged[0][0] <= saves[0]
 
 
-def test_a_drape_stopped_while_sewing_goes_on_from_the_last_stage_it_finished(tmp_path, monkeypatch):
+def test_a_drape_stopped_while_sewing_goes_on_from_the_last_stage_it_finished(tmp_path):
     """Stopped after the closing stage of its sewing, a drape resumed does not place the panels
     again (the first stage's start), settles, drapes and writes a clean result."""
     out = tmp_path / "out"
-    save = drape_checkpoint.DrapeCheckpoint.save_sewing
+    settings = DrapeSettings(spacing=SPACING, solver="implicit", images=False, progress=False)
 
-    def save_then_stop(self, stage, wall_seconds):
-        save(self, stage, wall_seconds)
-        if stage.stage == "closed":
+    def stop_once_closed(stage, step):
+        if stage == "closed":
             raise Stop
 
-    monkeypatch.setattr(drape_checkpoint.DrapeCheckpoint, "save_sewing", save_then_stop)
     flannel = fabric_by_name("wool_flannel")
     with pytest.raises(Stop):
-        drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver="implicit", images=False, progress=False)
+        drape_module.drape(DRESS, "M", flannel, out, settings, on_save=stop_once_closed)
     with np.load(out / "checkpoint.npz") as saved:
         assert str(saved["sewing_stage"]) == "closed" and "sewn_points" not in saved
 
-    monkeypatch.setattr(drape_checkpoint.DrapeCheckpoint, "save_sewing", save)
-    monkeypatch.setattr(garment_sim, "dress", lambda *args, **kwargs: pytest.fail("placed the panels again"))
-    summary = drape_module.drape(DRESS, "M", flannel, out, spacing=SPACING, solver="implicit", images=False,
-                                 progress=False, resume=True)
+    stages = []
+    summary = drape_module.drape(DRESS, "M", flannel, out, replace(settings, resume=True),
+                                 on_save=lambda stage, step: stages.append(stage))
+    assert stages[0] == "settling" and "sewn" not in stages  # the panels were not placed and sewn again
     assert summary["relaxation"]["at_rest"] and summary["max_seam_gap_mm"] < 1.0
     assert summary["body_penetrations"] == 0 and summary["cloth_crossings"] == 0
 
@@ -102,11 +100,11 @@ def test_a_sewing_resumed_after_its_first_stage_or_closing_ends_as_one_run_throu
     garment = assemble(load_pattern(DRESS), SPACING)
     body, flannel = load_body("M"), fabric_by_name("wool_flannel")
     stages = []
-    whole = garment_sim.sew(garment, body, flannel, on_stage=stages.append)
+    whole = sewing.sew(garment, body, flannel, on_stage=stages.append)
     assert [(s.stage, s.rounds) for s in stages][:2] == [("sewn", 0), ("closed", 0)]
     assert [s.rounds for s in stages[2:]] == list(range(1, len(stages) - 1)) and stages[2].stage == "settling"
     for stage in stages[:2] + stages[-1:]:
-        again = garment_sim.sew(garment, body, flannel, resume=stage)
+        again = sewing.sew(garment, body, flannel, resume=stage)
         assert np.array_equal(again.points, whole.points), stage.stage
         assert np.array_equal(again.seam_gaps, whole.seam_gaps)
         assert again.relaxation.energy == whole.relaxation.energy and again.settling.energy == whole.settling.energy

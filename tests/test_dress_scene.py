@@ -10,8 +10,7 @@ import pytest
 import trimesh
 from PIL import Image
 
-from party.scenes import drape_checkpoint, dress, garment_sim
-from party.scenes.drape_checkpoint import DrapeCheckpoint
+from party.scenes import dress
 
 
 @pytest.fixture(scope="module")
@@ -57,34 +56,34 @@ class Stop(Exception):
     pass
 
 
-def test_a_resumed_dress_takes_its_sewing_from_sewn_npz(dress_run, monkeypatch):
+def test_a_resumed_dress_takes_its_sewing_from_sewn_npz(dress_run):
     """Resumed, the dress does not sew again: its model starts where the run's did (its frame 0),
     and its summary keeps the sewing's log."""
     out, summary = dress_run
-    monkeypatch.setattr(drape_checkpoint, "sew", lambda *args, **kwargs: pytest.fail("sewed again"))
-    scene = dress.build(quick=True, out=out, resume=True)
+    stages = []
+    scene = dress.build(dress.Settings(quick=True), out=out, resume=True,
+                        on_save=lambda stage, step: stages.append(stage))
+    assert stages == []  # nothing sewn, so nothing saved
     frame_0 = trimesh.load(out / "frames" / "frame_000000.ply", process=False).vertices
     assert np.array_equal(scene.model.state().positions(), frame_0)
     assert scene.summary["relaxation"] == summary["relaxation"]
 
 
-def test_a_dress_stopped_while_sewing_goes_on_from_its_last_stage(dress_run, tmp_path, monkeypatch):
+def test_a_dress_stopped_while_sewing_goes_on_from_its_last_stage(dress_run, tmp_path):
     """Stopped after its closing stage, the dress resumed does not place its panels again and
     ends sewn where a run through did, bit for bit."""
     out, _ = dress_run
-    save = DrapeCheckpoint.save_sewing
 
-    def save_then_stop(self, stage, wall_seconds):
-        save(self, stage, wall_seconds)
-        if stage.stage == "closed":
+    def stop_once_closed(stage, step):
+        if stage == "closed":
             raise Stop
 
-    monkeypatch.setattr(DrapeCheckpoint, "save_sewing", save_then_stop)
     with pytest.raises(Stop):
-        dress.build(quick=True, out=tmp_path)
-    monkeypatch.setattr(DrapeCheckpoint, "save_sewing", save)
-    monkeypatch.setattr(garment_sim, "dress", lambda *args, **kwargs: pytest.fail("placed the panels again"))
-    scene = dress.build(quick=True, out=tmp_path, resume=True)
+        dress.build(dress.Settings(quick=True), out=tmp_path, on_save=stop_once_closed)
+    stages = []
+    scene = dress.build(dress.Settings(quick=True), out=tmp_path, resume=True,
+                        on_save=lambda stage, step: stages.append(stage))
+    assert stages[0] == "settling" and "sewn" not in stages  # the panels were not placed and sewn again
     frame_0 = trimesh.load(out / "frames" / "frame_000000.ply", process=False).vertices
     assert np.array_equal(scene.model.state().positions(), frame_0)
 

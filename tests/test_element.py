@@ -150,7 +150,8 @@ def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
     at the end of the step."""
     from party.fabric import wool_flannel
     from party.meshing import rectangular_net
-    from party.solvers.step_end import PLASTIC_TOLERANCE, StepEnd
+    from party.solvers.plastic_limit import TOLERANCE as PLASTIC_TOLERANCE
+    from party.solvers.plastic_limit import PlasticLimit
 
     net = rectangular_net(0.2, 0.2, 0.02)
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
@@ -161,11 +162,10 @@ def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
     dt = 1e-3
     found = []
     for serial in (True, False):
-        end = StepEnd(model, None, plastic_passes=200)
-        end._serial = serial
+        limit = PlasticLimit(model, 200, serial=serial)
         state = model.state()
         state.node_qd.assign(pull.astype(np.float32))
-        end._apply_plastic_limit(state, dt)
+        limit.apply(state, dt)
         found.append(state.velocities())
     assert np.array_equal(found[0], found[1])
     x = model.host["points"] + found[0] * dt
@@ -179,12 +179,12 @@ def pulled_sheet_sweeps(serial: bool, seed: int, epoch: int | None = None):
     """A 20 cm wool sheet pinned at a corner, its nodes pulled at random (30 m/s) twice;
     returns the first pull and a function giving, for an over-relaxation, the sweeps taken,
     the velocities and the nodes each correction moved (``moved_in``) of two plastic limits,
-    one after each pull, by one StepEnd (so the second limit starts where the first left its
+    one after each pull, by one PlasticLimit (so the second starts where the first left its
     bookkeeping), on the CPU in one launch (``serial``; the second limit's worklists counting
     their sweeps on from ``epoch`` where given) or one launch per colour."""
     from party.fabric import wool_flannel
     from party.meshing import rectangular_net
-    from party.solvers.step_end import StepEnd
+    from party.solvers.plastic_limit import PlasticLimit
 
     net = rectangular_net(0.2, 0.2, 0.02)
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
@@ -193,38 +193,35 @@ def pulled_sheet_sweeps(serial: bool, seed: int, epoch: int | None = None):
     model = b.finalize("cpu")
     pulls = np.random.default_rng(seed).normal(0.0, 30.0, (2, model.node_count, 3)).astype(np.float32)
 
-    def sweep(over_relaxation: float) -> tuple[list[int], np.ndarray, np.ndarray]:
-        end = StepEnd(model, None, plastic_passes=200)
-        end._serial = serial
+    def sweep(over_relaxation: float, skip_unchanged: bool = True) -> tuple[list[int], np.ndarray, np.ndarray]:
+        limit = PlasticLimit(model, 200, serial=serial, skip_unchanged=skip_unchanged)
         state = model.state()
         sweeps, velocities, moved = [], [], []
         for k, pull in enumerate(pulls):
             if k == 1 and epoch is not None:
-                end._worklists.epoch.fill_(epoch)
+                limit.worklists.epoch.fill_(epoch)
             state.node_qd.assign(pull)
-            sweeps.append(end._apply_plastic_limit(state, 1e-3, over_relaxation))
+            sweeps.append(limit.apply(state, 1e-3, over_relaxation))
             velocities.append(state.velocities())
-            moved.append(end._moved_in.numpy() > 0)
+            moved.append(limit.moved.numpy() > 0)
         return sweeps, np.array(velocities), np.array(moved)
 
     return pulls[0], sweep
 
 
 @pytest.mark.parametrize("serial, epoch", [(True, None), (True, int(EPOCH_LIMIT) + 1), (False, None)])
-def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_sweeps(monkeypatch, serial, epoch):
+def test_plastic_sweeps_leaving_out_unchanged_elements_end_bit_for_bit_as_full_sweeps(serial, epoch):
     """Sweeps after the first leave out elements whose nodes no correction has changed since
     the last sweep began (on the CPU visiting only the elements queued for them, also where
     the second limit starts their marks again); over a randomly pulled sheet, pulled twice, at
     both over-relaxations, they must give the velocities and moved nodes of sweeps over every
     element to the bit, in as many sweeps."""
-    from party.solvers import step_end
+    from party.solvers.plastic_limit import OVER_RELAXATION
 
     pull, sweep = pulled_sheet_sweeps(serial, seed=2, epoch=epoch)
-    for over_relaxation in (1.0, step_end.PLASTIC_OVER_RELAXATION):
+    for over_relaxation in (1.0, OVER_RELAXATION):
         sweeps, skipping, moved = sweep(over_relaxation)
-        with monkeypatch.context() as patch:
-            patch.setattr(step_end, "PLASTIC_SKIPS_UNCHANGED", False)
-            full_sweeps, full, full_moved = sweep(over_relaxation)
+        full_sweeps, full, full_moved = sweep(over_relaxation, skip_unchanged=False)
         assert sweeps == full_sweeps and min(sweeps) > 3
         assert np.array_equal(skipping, full) and np.array_equal(moved, full_moved)
         assert not np.array_equal(full[0], pull)
@@ -235,7 +232,7 @@ def test_plastic_sweeps_in_one_launch_end_bit_for_bit_as_sweeps_launched_by_colo
     randomly pulled sheet, pulled twice, at both over-relaxations, that gives the velocities
     and moved nodes of one launch per colour with a read of the count after each sweep, to
     the bit, in as many sweeps."""
-    from party.solvers.step_end import PLASTIC_OVER_RELAXATION
+    from party.solvers.plastic_limit import OVER_RELAXATION as PLASTIC_OVER_RELAXATION
 
     (pull, in_one_launch), (_, by_colour) = pulled_sheet_sweeps(True, seed=3), pulled_sheet_sweeps(False, seed=3)
     for over_relaxation in (1.0, PLASTIC_OVER_RELAXATION):
@@ -268,7 +265,9 @@ def test_over_relaxed_plastic_sweeps_converge_faster_to_the_same_bound():
     relaxed at PLASTIC_OVER_RELAXATION it reaches the same tolerance in under half the sweeps.
     Both leave no element beyond its limit, and over-relaxation leaves none shorter than its
     rest length (it overshoots, never reverses the stretch)."""
-    from party.solvers.step_end import PLASTIC_OVER_RELAXATION, PLASTIC_TOLERANCE, StepEnd
+    from party.solvers.plastic_limit import OVER_RELAXATION as PLASTIC_OVER_RELAXATION
+    from party.solvers.plastic_limit import TOLERANCE as PLASTIC_TOLERANCE
+    from party.solvers.plastic_limit import PlasticLimit
 
     l0, strain_limit, n = 0.02, 0.1, 41
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
@@ -282,10 +281,10 @@ def test_over_relaxed_plastic_sweeps_converge_faster_to_the_same_bound():
     falling[:, 2] = -0.3 * np.arange(n) / n
     sweeps, lengths = {}, {}
     for over_relaxation in (1.0, PLASTIC_OVER_RELAXATION):
-        end = StepEnd(model, None, plastic_passes=5000)
+        limit = PlasticLimit(model, 5000)
         state = model.state()
         state.node_qd.assign(falling)
-        sweeps[over_relaxation] = end._apply_plastic_limit(state, dt, over_relaxation)
+        sweeps[over_relaxation] = limit.apply(state, dt, over_relaxation)
         x = model.host["points"] + state.velocities() * dt
         lengths[over_relaxation] = np.linalg.norm(np.diff(x, axis=0), axis=1)
     for found in lengths.values():
@@ -296,11 +295,11 @@ def test_over_relaxed_plastic_sweeps_converge_faster_to_the_same_bound():
 
 def test_plastic_over_relaxation_outside_one_to_two_is_refused():
     from party.errors import InvalidInput
-    from party.solvers.step_end import StepEnd
+    from party.solvers.filters import StepFilters
 
     model, _ = hanging_chain(0.1)
     with pytest.raises(InvalidInput, match=r"plastic over-relaxation must be in \[1, 2\), got 2.0"):
-        StepEnd(model, None, plastic_passes=8, plastic_over_relaxation=2.0)
+        StepFilters(model, None, plastic_passes=8, plastic_over_relaxation=2.0)
 
 
 def test_elements_beyond_limit_counts_what_the_limit_has_not_taken_back():

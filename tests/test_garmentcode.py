@@ -59,13 +59,13 @@ def pencil_drape(tmp_path_factory):
 @pytest.mark.parametrize("path", [p for p in SAMPLES if "pencil" not in p.name],
                          ids=lambda p: p.name.removesuffix("_specification.json"))
 def test_sample_drapes_on_mean_all_closed_and_clean(path, tmp_path):
-    from party.scenes.garment_sim import OVERSTRETCHED
+    from party.garment.sewing import SewingSettings
 
     summary = _drape(path, tmp_path / "out", images=False)
     _assert_closed_and_clean(summary)
     # each fits mean_all: what sewing left stretched, settling pulled back (the jumpsuit came out
     # of one round of settling with its front bodice at 5.0 times rest over the shoulders)
-    assert summary["max_sewn_elongation"] < OVERSTRETCHED
+    assert summary["max_sewn_elongation"] < SewingSettings().overstretched
 
 
 @pytest.mark.parametrize("name", ["dress_sleeves_flare", "hoody_mean", "dress_pencil", "js_mean_all"])
@@ -134,7 +134,7 @@ def test_tshirt_sews_with_no_crossing_in_a_stiff_and_a_light_fabric(fabric):
     from party.body.load import load_body
     from party.fabric import library
     from party.output.metrics import cloth_crossings
-    from party.scenes.garment_sim import sew
+    from party.garment.sewing import sew
 
     garment = assemble(load_pattern(DATA / "patterns" / "tshirt_mean_specification.json"), 0.02)
     sewn = sew(garment, load_body(str(DATA / "bodies" / "mean_all.obj")), library()[fabric])
@@ -148,7 +148,7 @@ def test_the_jumpsuit_in_denim_sews_closed():
     goes on while a seam is more than 1 cm open (18,000 iterations here)."""
     from party.body.load import load_body
     from party.fabric import library
-    from party.scenes.garment_sim import sew
+    from party.garment.sewing import sew
 
     garment = assemble(load_pattern(DATA / "patterns" / "js_mean_all_specification.json"), 0.02)
     sewn = sew(garment, load_body(str(DATA / "bodies" / "mean_all.obj")), library()["denim"])
@@ -161,10 +161,10 @@ def test_the_tshirt_in_denim_drapes_with_the_explicit_solver_with_no_crossing(tm
     unchecked when the relaxation stops: without the guard the denim tshirt ended with 9
     crossings, with it but without that last check 4."""
     from party.fabric import library
-    from party.scenes.drape import drape
+    from party.scenes.drape import DrapeSettings, drape
 
     summary = drape(DATA / "patterns" / "tshirt_mean_specification.json", str(DATA / "bodies" / "mean_all.obj"),
-                    library()["denim"], tmp_path / "out", images=False, progress=False)
+                    library()["denim"], tmp_path / "out", DrapeSettings(images=False, progress=False))
     _assert_closed_and_clean(summary)
 
 
@@ -175,10 +175,10 @@ def test_the_shirt_in_denim_drapes_with_the_implicit_solver_to_rest_unstretched(
     Without the planes the denim shirt's armpits stretched to 1.70 times rest and it was not
     at rest after 10 s."""
     from party.fabric import library
-    from party.scenes.drape import drape
+    from party.scenes.drape import DrapeSettings, drape
 
     summary = drape(DATA / "patterns" / "shirt_mean_specification.json", str(DATA / "bodies" / "mean_all.obj"),
-                    library()["denim"], tmp_path / "out", images=False, progress=False, solver="implicit")
+                    library()["denim"], tmp_path / "out", DrapeSettings(images=False, progress=False, solver="implicit"))
     _assert_closed_and_clean(summary)
     assert summary["relaxation"]["at_rest"]
 
@@ -188,7 +188,8 @@ def jumpsuit_sewn_stretch(fabric_name: str) -> np.ndarray:
     elements' lengths over rest."""
     from party.body import load_body
     from party.fabric import fabric_by_name
-    from party.scenes.garment_sim import garment_model, sew
+    from party.garment.sewing import sew
+    from party.garment.worn import garment_model
 
     garment = assemble(load_pattern(DATA / "patterns" / "js_mean_all_specification.json"), 0.02)
     body = load_body(str(DATA / "bodies" / "mean_all.obj"))
@@ -202,9 +203,9 @@ def jumpsuit_sewn_stretch(fabric_name: str) -> np.ndarray:
 def test_stiff_cloth_settles_on_while_rounds_help_though_its_energy_has_settled():
     # cotton's small explicit steps met the energy criterion in the jumpsuit's first settling round
     # with 184 elements beyond 1.5 times rest (up to 7.6 at hips and shoulders), which ended the rounds
-    from party.scenes.garment_sim import OVERSTRETCHED
+    from party.garment.sewing import SewingSettings
 
-    assert jumpsuit_sewn_stretch("cotton").max() < OVERSTRETCHED
+    assert jumpsuit_sewn_stretch("cotton").max() < SewingSettings().overstretched
 
 
 def test_denim_settles_on_while_its_excess_falls_though_its_worst_elements_stretch_further():

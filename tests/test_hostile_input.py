@@ -331,13 +331,13 @@ def resumable_scene(kind: str):
     from party.scenes import rod_wind, sphere_drop
 
     if kind == "implicit":
-        return sphere_drop.build(grid=16, duration=0.4, solver="implicit"), 9
+        return sphere_drop.build(sphere_drop.Settings(grid=16, duration=0.4, solver="implicit")), 9
     if kind == "explicit":
-        return sphere_drop.build(grid=10, duration=0.3, solver="explicit", dt=1e-4), 8
+        return sphere_drop.build(sphere_drop.Settings(grid=10, duration=0.3, solver="explicit", dt=1e-4)), 8
     if kind == "hysteresis":
-        return sphere_drop.build(grid=12, duration=0.3, solver="implicit",
-                                 fabric=library()["cotton"].with_(bending_hysteresis=2e-5)), 8
-    return rod_wind.build(spacing=0.05, duration=0.063, frame_interval=0.0105), 3  # frames of 105 steps: the
+        return sphere_drop.build(sphere_drop.Settings(grid=12, duration=0.3, solver="implicit",
+                                                      fabric=library()["cotton"].with_(bending_hysteresis=2e-5))), 8
+    return rod_wind.build(rod_wind.Settings(spacing=0.05, duration=0.063, frame_interval=0.0105)), 3  # frames of 105 steps: the
     # shielding, updated every 20 steps, is carried over a frame's end
 
 

@@ -1,12 +1,16 @@
 """The implicit (large-step) solver: agreement with the explicit one, dissipation, stability,
 and the crossing guard."""
 
+import math
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import warp as wp
 
 from party.body import sphere
 from party.collision import CollisionSettings
+from party.collision.crossing_guard import GuardSettings
 from party.fabric import library, wool_flannel
 from party.meshing import rectangular_net
 from party.model import ModelBuilder
@@ -14,9 +18,9 @@ from party.output.metrics import cloth_crossings, max_elongation
 from party.body.probe import ColliderProbe
 from party.solvers import SolverExplicit, SolverImplicit
 from party.solvers.implicit.solver import node_neighbours
-from party.solvers.select import DEFAULT_DT
+from party.solvers.registry import solver_class
 from party.solvers.explicit.solver import critical_time_step
-from party.solvers.relax import SolverRelax, total_energy
+from party.solvers.relax import StaticRelaxation, total_energy
 from conftest import simulate
 
 FRAME = 1.0 / 60.0
@@ -39,7 +43,7 @@ def test_implicit_rest_shape_matches_the_explicit_one():
         model = hammock(fabric)
         state = model.state()
         dt = 0.8 * critical_time_step(model) if solver == "explicit" else 1.0 / 300.0
-        result = SolverRelax(model, collision=None, momentum=0.9, solver=solver).relax(
+        result = StaticRelaxation(model, collision=None, momentum=0.9, solver=solver).relax(
             state, dt, max_iterations=60000, min_iterations=500, tolerance=1e-6)
         assert result.converged
         shapes[solver] = state.positions()
@@ -143,7 +147,7 @@ def test_large_steps_stay_stable_for_every_fabric(name):
     assert elongation.max() <= (1 + fabric.strain_limit) * 1.001
 
 
-def test_stiff_light_cloth_drapes_as_with_four_times_the_sweeps(monkeypatch):
+def test_stiff_light_cloth_drapes_as_with_four_times_the_sweeps():
     """A Cusick specimen of denim at 15 mm, stiff for its inertia (K dt^2 / m 5,600 at
     1/300 s, the solver's own step rather than the drape tests' 1/1,000 s): the sweeps the
     solver's rule takes for it (14, from ``STIFFNESS_PER_SWEEP``; not the drape's 15) drape it
@@ -155,12 +159,11 @@ def test_stiff_light_cloth_drapes_as_with_four_times_the_sweeps(monkeypatch):
     rule 36.7 % and 7.5 folds, 40 sweeps 34.0 % and 7.25)."""
     from party.validate import cusick
 
-    monkeypatch.setattr(cusick, "FALL_STEP", DEFAULT_DT["implicit"])
     denim = library()["denim"]
     drapes = {}
     for sweeps in (1, 40):
-        monkeypatch.setattr(cusick, "DRAPE_SWEEPS", sweeps)
-        drapes[sweeps] = [cusick.drape_test(denim, "implicit", 0.015, seed=seed) for seed in range(4)]
+        fall = {"dt": solver_class("implicit").default_dt, "iterations": sweeps}
+        drapes[sweeps] = [cusick.drape_test(denim, "implicit", 0.015, seed=seed, fall=fall) for seed in range(4)]
     given, many = ([(d.coefficient, d.nodes) for d in drapes[k]] for k in (1, 40))
     (given_dc, given_folds), (many_dc, many_folds) = np.mean(given, axis=0), np.mean(many, axis=0)
     assert abs(given_dc - many_dc) < 0.05
@@ -229,7 +232,7 @@ def test_sweeps_grow_with_stiffness_over_inertia_alike_for_a_net_and_a_membrane(
 
 
 def crossing_strips(guard: bool, solver_class=SolverImplicit, dt: float = 1.0 / 300.0, steps: int = 20,
-                    every: int = 1):
+                    every: int = 1, search: GuardSettings = GuardSettings()):
     """Two narrow strips in an X, the upper one tilted across its width and falling through the
     lower one so that edges pierce triangles while no node ever lies over the other strip."""
     fabric = wool_flannel()
@@ -240,7 +243,7 @@ def crossing_strips(guard: bool, solver_class=SolverImplicit, dt: float = 1.0 / 
     y = upper.uv[:, 1] - 0.01
     b.add_cloth(upper, fabric, np.c_[upper.uv[:, 0] - 0.22, y, 0.012 + 0.5 * y])
     model = b.finalize("cpu")
-    solver = solver_class(model, collision=CollisionSettings(crossing_guard=guard, guard_every=every))
+    solver = solver_class(model, collision=CollisionSettings(crossing_guard=guard, guard_every=every, guard=search))
     velocity = np.zeros((model.node_count, 3), np.float32)
     velocity[lower.node_count:, 2] = -0.6
     state, scratch = model.state(), model.state()
@@ -267,7 +270,7 @@ def test_crossing_guard_checking_every_few_explicit_steps_leaves_no_crossing(eve
     unguarded, _ = crossing_strips(False, SolverExplicit, 2e-4, 300, every)
     assert unguarded.max() > 0
     guarded, solver = crossing_strips(True, SolverExplicit, 2e-4, 300, every)
-    assert guarded.max() == 0 and solver.end.guard.reverts > 0
+    assert guarded.max() == 0 and solver.filters.guard.reverts > 0
     assert solver.crossing_stretch.max() <= (1 + wool_flannel().strain_limit) * 1.001
 
 
@@ -297,20 +300,19 @@ def test_guard_and_collision_give_the_same_on_one_thread_and_on_several(monkeypa
     revert the same nodes and end bit for bit where one thread leaves them."""
     from party import launch
 
-    monkeypatch.setattr(launch, "MIN_CHUNK", 4)
     runs = []
     for threads in ("1", "3"):
         monkeypatch.setenv("PARTY_THREADS", threads)
-        counts, solver = crossing_strips(guard=True)
-        assert solver.workers == min(int(threads), launch._CORES)
-        runs.append((counts, solver.end.guard.reverts, solver.final_points))
+        with launch.using(launch.Launcher(launch.LaunchSettings(min_chunk=4))):
+            counts, solver = crossing_strips(guard=True)
+        assert solver.workers == min(int(threads), launch.CORES)
+        runs.append((counts, solver.filters.guard.reverts, solver.final_points))
     assert runs[0][1] > 0 and runs[0][1] == runs[1][1]
     assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][2], runs[1][2])
 
 
 @pytest.mark.parametrize("room,hot_share,reach", [(1, 0.01, 8e-3), (16, 0.01, 8e-3), (16, 0.1, 8e-3), (16, 1.0, 2e-3)])
-def test_crossing_guard_testing_listed_triangles_finds_what_a_search_at_every_check_finds(monkeypatch, room,
-                                                                                         hot_share, reach):
+def test_crossing_guard_testing_listed_triangles_finds_what_a_search_at_every_check_finds(room, hot_share, reach):
     """The guard tests each edge against the triangles listed near it, and the edges and
     triangles at nodes that have moved half the lists' reach against everything near them,
     listing anew once too many nodes have: on the falling strips that reverts the same nodes
@@ -318,68 +320,43 @@ def test_crossing_guard_testing_listed_triangles_finds_what_a_search_at_every_ch
     the lists start with room for one triangle and must grow, and where they are never made
     anew and reach 2 mm, less than the strips' first distance (every crossing found by
     searching around the moving nodes)."""
-    import party.collision.crossing_guard as guard
-
-    monkeypatch.setattr(guard, "NEAR_ROOM", room)
-    monkeypatch.setattr(guard, "HOT_SHARE", hot_share)
-    monkeypatch.setattr(guard, "NEAR_REACH", reach)
-    listed_counts, listed = crossing_strips(guard=True)
-    check = guard.CrossingGuard._check
-
-    def search_at_every_check(self, x):
-        self._listed = False
-        return check(self, x)
-
-    monkeypatch.setattr(guard.CrossingGuard, "_check", search_at_every_check)
-    searched_counts, searched = crossing_strips(guard=True)
-    assert listed.end.guard.searches < searched.end.guard.searches
-    assert listed.end.guard.reverts == searched.end.guard.reverts > 0
+    search = GuardSettings(near_room=room, hot_share=hot_share, near_reach=reach)
+    listed_counts, listed = crossing_strips(guard=True, search=search)
+    searched_counts, searched = crossing_strips(guard=True, search=replace(search, keep_lists=False))
+    assert listed.filters.guard.searches < searched.filters.guard.searches
+    assert listed.filters.guard.reverts == searched.filters.guard.reverts > 0
     assert np.array_equal(listed_counts, searched_counts) and listed_counts.max() == 0
     assert np.array_equal(listed.final_points, searched.final_points)
     if room == 1:
-        assert listed.end.guard.near.shape[1] > 1
+        assert listed.filters.guard.near.shape[1] > 1
     if hot_share == 1.0:
-        assert listed.end.guard.searches == 1
+        assert listed.filters.guard.searches == 1
 
 
-def test_crossing_guard_testing_every_edge_without_lists_finds_what_its_lists_find(monkeypatch):
+def test_crossing_guard_testing_every_edge_without_lists_finds_what_its_lists_find():
     """Where the cloth moves too fast for lists to last, the guard tests every edge against
     the triangles its box meets instead of listing: on the falling strips that reverts the
-    same nodes and ends bit for bit where checking through lists does."""
-    import party.collision.crossing_guard as guard
-
-    runs = {}
-    for fast in (False, True):
-        monkeypatch.setattr(guard.CrossingGuard, "_moving_fast", lambda self, x, fast=fast: fast)
-        runs[fast] = crossing_strips(guard=True)
+    same nodes and ends bit for bit where checking through lists does (the cloth judged fast
+    at any motion, and never)."""
+    runs = {fast: crossing_strips(guard=True, search=GuardSettings(fast_share=0.0 if fast else math.inf))
+            for fast in (False, True)}
     (listed_counts, listed), (direct_counts, direct) = runs[False], runs[True]
-    assert direct.end.guard.searches == 0 and direct.end.guard.direct_checks > 20
-    assert listed.end.guard.direct_checks == 0 and listed.end.guard.searches > 0
-    assert direct.end.guard.reverts == listed.end.guard.reverts > 0
+    assert direct.filters.guard.searches == 0 and direct.filters.guard.direct_checks > 20
+    assert listed.filters.guard.direct_checks == 0 and listed.filters.guard.searches > 0
+    assert direct.filters.guard.reverts == listed.filters.guard.reverts > 0
     assert np.array_equal(direct_counts, listed_counts) and direct_counts.max() == 0
     assert np.array_equal(direct.final_points, listed.final_points)
 
 
-def test_crossing_guard_rechecking_the_reverted_nodes_finds_what_checking_everything_finds(monkeypatch):
+def test_crossing_guard_rechecking_the_reverted_nodes_finds_what_checking_everything_finds():
     """After a round of reverts the guard tests only the edges and triangles at the nodes it
     reverted (and the edges it marked): on the falling strips, whose checks take several
     rounds, that reverts the same nodes and ends bit for bit where checking every pair again
     does."""
-    import party.collision.crossing_guard as guard
-
-    rechecks = []
-    recheck = guard.CrossingGuard._recheck
-
-    def counted(self, x):
-        rechecks.append(1)
-        return recheck(self, x)
-
-    monkeypatch.setattr(guard.CrossingGuard, "_recheck", counted)
     counts, partial = crossing_strips(guard=True)
-    assert len(rechecks) > 5
-    monkeypatch.setattr(guard.CrossingGuard, "_recheck", lambda self, x: guard.CrossingGuard._check(self, x))
-    full_counts, full = crossing_strips(guard=True)
-    assert partial.end.guard.reverts == full.end.guard.reverts > 0
+    assert partial.filters.guard.rechecks > 5
+    full_counts, full = crossing_strips(guard=True, search=GuardSettings(partial_recheck=False))
+    assert partial.filters.guard.reverts == full.filters.guard.reverts > 0
     assert np.array_equal(counts, full_counts) and counts.max() == 0
     assert np.array_equal(partial.final_points, full.final_points)
 
@@ -419,4 +396,4 @@ def test_crossing_guard_stops_edges_piercing_between_nodes():
     assert unguarded.max() > 0  # node-triangle detection alone lets these edges through
     guarded, solver = crossing_strips(guard=True)
     assert guarded.max() == 0
-    assert solver.end.guard.reverts > 0
+    assert solver.filters.guard.reverts > 0

@@ -15,24 +15,27 @@ def _square_into(first: int, values: wp.array(dtype=float), out: wp.array(dtype=
     visits[i] = visits[i] + 1
 
 
-@pytest.fixture
-def small_chunks(monkeypatch):
-    monkeypatch.setattr(launch, "MIN_CHUNK", 16)
-    monkeypatch.setattr(launch, "SPLIT_SECONDS", 0.0)
-    monkeypatch.setattr(launch, "_item_seconds", {})
-    monkeypatch.setattr(launch, "_loaded", set())
+class Chunks(launch.Launcher):
+    """A launcher that lists the chunks its item-wise launches are cut into, each a plain launch."""
+
+    def __init__(self, settings: launch.LaunchSettings) -> None:
+        super().__init__(settings)
+        self.chunks = []
+
+    def launch(self, kernel, dim, inputs, outputs=(), device=None):
+        self.chunks.append((inputs[0], dim))
+        wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
+
+
+def test_chunks_cover_every_item_once(monkeypatch):
     monkeypatch.setenv("PARTY_THREADS", "3")
-
-
-def test_chunks_cover_every_item_once(small_chunks, monkeypatch):
-    chunks = []
-    monkeypatch.setattr(launch, "launch", lambda kernel, count, inputs, device: (
-        chunks.append((inputs[0], count)), wp.launch(kernel, dim=count, inputs=inputs, device=device)))
+    launcher = Chunks(launch.LaunchSettings(min_chunk=16, split_seconds=0.0))
+    chunks = launcher.chunks
     values = wp.array(np.arange(1000, dtype=np.float32), dtype=float, device="cpu")
     out = wp.zeros(1000, dtype=float, device="cpu")
     visits = wp.zeros(1000, dtype=int, device="cpu")
     for _ in range(3):  # the first launch of a kernel runs whole, the second whole and timed, the next in chunks
-        launch.launch_items(_square_into, 100, 850, [values, out, visits], "cpu")
+        launcher.launch_items(_square_into, 100, 850, [values, out, visits], "cpu")
     expected = np.where((np.arange(1000) >= 100) & (np.arange(1000) < 950), np.arange(1000.0) ** 2, 0.0)
     assert np.array_equal(out.numpy(), expected.astype(np.float32))
     assert np.array_equal(visits.numpy(), 3 * (expected > 0))
@@ -40,19 +43,14 @@ def test_chunks_cover_every_item_once(small_chunks, monkeypatch):
 
 
 def test_a_launch_shorter_than_a_handoff_stays_on_one_thread(monkeypatch):
-    monkeypatch.setattr(launch, "MIN_CHUNK", 16)
-    monkeypatch.setattr(launch, "_item_seconds", {})
-    monkeypatch.setattr(launch, "_loaded", set())
     monkeypatch.setenv("PARTY_THREADS", "3")
-    chunks = []
-    monkeypatch.setattr(launch, "launch", lambda kernel, count, inputs, device: (
-        chunks.append(count), wp.launch(kernel, dim=count, inputs=inputs, device=device)))
+    launcher = Chunks(launch.LaunchSettings(min_chunk=16))
     values = wp.array(np.arange(100, dtype=np.float32), dtype=float, device="cpu")
     out = wp.zeros(100, dtype=float, device="cpu")
     visits = wp.zeros(100, dtype=int, device="cpu")
     for _ in range(4):
-        launch.launch_items(_square_into, 0, 100, [values, out, visits], "cpu")
-    assert chunks == [100, 100, 100, 100]
+        launcher.launch_items(_square_into, 0, 100, [values, out, visits], "cpu")
+    assert [count for _, count in launcher.chunks] == [100, 100, 100, 100]
 
 
 def test_a_bad_thread_count_is_one_line(monkeypatch):
@@ -67,31 +65,30 @@ def _scale_into(values: wp.array(dtype=float), factor: float, out: wp.array(dtyp
     out[i] = values[i] * factor
 
 
-def test_a_replayed_launch_sees_its_arrays_contents_and_not_another_calls_values(monkeypatch):
-    monkeypatch.setattr(launch, "_recorded", launch.OrderedDict())
+def test_a_replayed_launch_sees_its_arrays_contents_and_not_another_calls_values():
+    launcher = launch.Launcher()
     values = wp.array(np.arange(4, dtype=np.float32), dtype=float, device="cpu")
     out = wp.zeros(4, dtype=float, device="cpu")
     other = wp.zeros(4, dtype=float, device="cpu")
-    launch.launch(_scale_into, 4, [values, 2.0], [out], device="cpu")
+    launcher.launch(_scale_into, 4, [values, 2.0], [out], device="cpu")
     assert np.array_equal(out.numpy(), [0, 2, 4, 6])
     values.assign(np.full(4, 10.0, dtype=np.float32))
-    launch.launch(_scale_into, 4, [values, 2.0], [out], device="cpu")  # replayed: reads the new contents
+    launcher.launch(_scale_into, 4, [values, 2.0], [out], device="cpu")  # replayed: reads the new contents
     assert np.array_equal(out.numpy(), [20, 20, 20, 20])
-    launch.launch(_scale_into, 4, [values, 3.0], [out], device="cpu")
+    launcher.launch(_scale_into, 4, [values, 3.0], [out], device="cpu")
     assert np.array_equal(out.numpy(), [30, 30, 30, 30])
-    launch.launch(_scale_into, 2, [values, 1.0], [other], device="cpu")
+    launcher.launch(_scale_into, 2, [values, 1.0], [other], device="cpu")
     assert np.array_equal(other.numpy(), [10, 10, 0, 0])
-    assert len(launch._recorded) == 3
+    assert len(launcher.recorded) == 3
 
 
-def test_recorded_launches_are_bounded(monkeypatch):
-    monkeypatch.setattr(launch, "_recorded", launch.OrderedDict())
-    monkeypatch.setattr(launch, "MAX_RECORDED", 2)
+def test_recorded_launches_are_bounded():
+    launcher = launch.Launcher(launch.LaunchSettings(max_recorded=2))
     values = wp.ones(3, dtype=float, device="cpu")
     out = wp.zeros(3, dtype=float, device="cpu")
     for factor in (1.0, 2.0, 3.0):
-        launch.launch(_scale_into, 3, [values, factor], [out], device="cpu")
-    assert len(launch._recorded) == 2
+        launcher.launch(_scale_into, 3, [values, factor], [out], device="cpu")
+    assert len(launcher.recorded) == 2
     assert np.array_equal(out.numpy(), [3, 3, 3])
 
 
@@ -158,16 +155,16 @@ def test_workers_meeting_at_barriers_give_what_one_worker_gives():
     assert np.array_equal(results[0], results[1])
 
 
-def test_a_worker_that_never_arrives_is_an_error_not_a_hang(monkeypatch):
-    monkeypatch.setattr(launch, "WORKER_SPINS", 10000)
+def test_a_worker_that_never_arrives_is_an_error_not_a_hang():
+    launcher = launch.Launcher(launch.LaunchSettings(worker_spins=10000))
     sync = launch.worker_sync("cpu")
     with pytest.raises(WorkersLost, match="^_one_stays_away: a worker thread waited 10000 spins for the others; "
                                           "rerun with PARTY_THREADS=1$"):
-        launch.launch_workers(_one_stays_away, 2, sync, [], "cpu")
+        launcher.launch_workers(_one_stays_away, 2, sync, [], "cpu")
     assert sync.counters.numpy().tolist()[:3] == [0, 0, 0]
 
 
-@pytest.mark.skipif(launch._SCHED_YIELD == 0, reason="this platform's C library has no sched_yield")
+@pytest.mark.skipif(launch.SCHED_YIELD == 0, reason="this platform's C library has no sched_yield")
 def test_a_worker_waiting_long_gives_its_core_away():
     """Worker 0 waits at the barrier until worker 1 sees it give its core away; had it only
     spun, worker 1 would arrive after 10^8 looks with no yield counted. Both then pass the

@@ -15,7 +15,7 @@ from party.fabric import wool_flannel
 from party.meshing import rectangular_net
 from party.model import ModelBuilder
 from party.solvers import SolverImplicit
-from party.solvers.select import DEFAULT_DT
+from party.solvers.registry import solver_class
 from conftest import simulate
 
 RADIUS = 0.3
@@ -83,7 +83,7 @@ def test_cloth_on_a_sphere_whose_vertices_are_untested_stays_a_gap_off_them():
     every vertex under it is still well over the gap (a quarter of eps) above it."""
     model = cloth_over(sphere(), 0.016)
     solver = SolverImplicit(model, collision=CollisionSettings(body_vertices=True, crossing_guard=True, arrive=True))
-    state = simulate(model, solver, int(round(0.4 * 300)), DEFAULT_DT["implicit"])
+    state = simulate(model, solver, int(round(0.4 * 300)), solver_class("implicit").default_dt)
     heights = cloth_heights_over_vertices(state.positions(), model.triangles, sphere())
     eps = wool_flannel().thickness
     assert len(heights) > 50

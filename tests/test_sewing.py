@@ -28,11 +28,11 @@ def tube_pattern():
 
 @pytest.fixture(scope="module")
 def sewn_tube():
-    from party.scenes.garment_sim import sew
+    from party.garment.sewing import SewingSettings, sew
 
     body = Body("cylinder", (rod(0.8, 0.08, center=(0, 0, 0.15), axis=(0, 0, 1)),), {"shoulder": 0.3})
     garment = assemble(tube_pattern(), 0.02)
-    return sew(garment, body, wool_flannel(), max_iterations=3000), body
+    return sew(garment, body, wool_flannel(), SewingSettings(max_iterations=3000)), body
 
 
 def test_tube_closes_around_the_cylinder(sewn_tube):

@@ -4,5 +4,6 @@ through layers (figure 10)."""
 
 from .intervals import AxisIntervalLists
 from .pipeline import CollisionPipeline, CollisionSettings
+from . import presets
 
-__all__ = ["AxisIntervalLists", "CollisionPipeline", "CollisionSettings"]
+__all__ = ["AxisIntervalLists", "CollisionPipeline", "CollisionSettings", "presets"]

@@ -14,11 +14,12 @@ creates a crossing. Crossings present before a step (from a set-up) are left alo
 counted as new.
 
 Each check tests every edge against the triangles listed near it, not against a fresh search: a
-search lists, per edge, the triangles within a reach of it (:data:`NEAR_REACH`; a Verlet list).
+search lists, per edge, the triangles within a reach of it (``near_reach``; a Verlet list).
 No other triangle can have come to an edge before one of their nodes has moved half the reach
 since, beyond the mean displacement of all nodes (a common translation moves no pair closer: cloth
 falling as a whole keeps its lists); the edges and triangles at such nodes are searched with BVHs
-at every check, and the lists are made anew once too many nodes have (:data:`HOT_SHARE`).
+at every check, and the lists are made anew once too many nodes have (``hot_share``; both in
+:class:`GuardSettings`).
 Searching every edge at every check had cost the reference dress's implicit drape 3 ms a step,
 15 % of its time (:meth:`CrossingGuard._check`). Where the cloth moves so fast that lists would
 be made again within a few checks (a sheet striking a sphere at large steps), each edge is
@@ -27,6 +28,8 @@ does and costs less than half of one.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import warp as wp
@@ -41,27 +44,34 @@ wp.set_module_options({"enable_backward": False})  # no adjoints: party never di
 MAX_SPREAD = 32
 """Rounds of growing the reverted nodes over stretched elements (:meth:`CrossingGuard._spread`)."""
 
-NEAR_REACH = 8.0e-3
-"""How far [m] from an edge the triangles listed for it reach, at most; and at most half the
-net's median edge, so that a flat sheet's own triangles beyond the edge's ring are not listed."""
+@dataclass(frozen=True)
+class GuardSettings:
+    """How the crossing guard searches (any of these gives the same answer, at another cost).
 
-NEAR_ROOM = 16
-"""Triangles listed per edge at first; the lists grow when a search finds more."""
+    Attributes:
+        near_reach: How far [m] from an edge the triangles listed for it reach, at most; and at
+            most half the net's median edge, so that a flat sheet's own triangles beyond the
+            edge's ring are not listed.
+        near_room: Triangles listed per edge at first; the lists grow when a search finds more.
+        hot_share: The lists are made again once more than this share of the nodes (and at
+            least 8) have moved half the reach since they were listed; until then the edges and
+            triangles at those nodes are searched at every check.
+        fast_share: A list would be made again within a few checks where, since the last check,
+            more nodes than ``hot_share`` allows moved farther than this share of the reach
+            (beyond the mean displacement); the check then tests every edge against the
+            triangles its box meets, without listing (about 40 % of a listing's cost).
+        keep_lists: Keep the lists from check to check (False: list anew at every check).
+        partial_recheck: After a round of reverts test only what the reverted nodes touch
+            (False: test every pair again).
+    """
 
-HOT_SHARE = 0.1
-"""The lists are made again once more than this share of the nodes (and at least 8) have moved
-half the reach since they were listed; until then the edges and triangles at those nodes are
-searched at every check. (Any share gives the same answer; 0.01 had the checks of GarmentCode's
-flare dress at 9 mm, at rest with some 1,900 nodes sent back at every step, test every edge
-against the triangles its box meets, 30 ms a step, where the lists and those nodes take 24 ms
-with the listings every tenth step; a 100 x 100 sheet dropped on a sphere 7.9 ms a step
-instead of 6.0.)"""
+    near_reach: float = 8.0e-3
+    near_room: int = 16
+    hot_share: float = 0.1
+    fast_share: float = 0.25
+    keep_lists: bool = True
+    partial_recheck: bool = True
 
-FAST_SHARE = 0.25
-"""A list would be made again within a few checks where, since the last check, more nodes than
-:data:`HOT_SHARE` allows moved farther than this share of the reach (beyond the mean
-displacement); the check then tests every edge against the triangles its box meets, without
-listing (about 40 % of a listing's cost)."""
 
 MAX_ROUNDS = 16
 """Rounds of check-and-revert per step; a round reverts every pair found, so a step needs
@@ -277,9 +287,10 @@ class CrossingGuard:
     fraction and guards the same: nodes reverted go back a few steps (a millimetre or so at
     the explicit solver's steps) to a state that had no new crossing."""
 
-    def __init__(self, model: Model, every: int = 1) -> None:
+    def __init__(self, model: Model, every: int = 1, settings: GuardSettings = GuardSettings()) -> None:
         self.model = model
         self.every = max(int(every), 1)
+        self.settings = settings
         dev = model.device
         tri = model.triangles
         edges = triangle_edges(tri)
@@ -295,21 +306,22 @@ class CrossingGuard:
         self.found = wp.zeros(1, dtype=int, device=dev)
         self.anchor = wp.zeros(model.node_count, dtype=wp.vec3, device=dev)
         self.added = wp.zeros(1, dtype=int, device=dev)
-        self.near = wp.zeros((self.edge_count, NEAR_ROOM), dtype=int, device=dev)
+        self.near = wp.zeros((self.edge_count, settings.near_room), dtype=int, device=dev)
         self.near_count = wp.zeros(self.edge_count, dtype=int, device=dev)
         self.listed_at = wp.zeros(model.node_count, dtype=wp.vec3, device=dev)
         rest = model.host["element_params"][:, 0]
-        self.reach = min(NEAR_REACH, 0.5 * float(np.median(rest))) if len(rest) else NEAR_REACH
+        self.reach = min(settings.near_reach, 0.5 * float(np.median(rest))) if len(rest) else settings.near_reach
         self._listed = False
         self._flag = wp.zeros(1, dtype=int, device=dev)
         self.hot = wp.zeros(model.node_count, dtype=int, device=dev)
         self._displacement = wp.zeros(1, dtype=wp.vec3, device=dev)
-        self._most_hot = max(8, int(HOT_SHARE * model.node_count))
+        self._most_hot = max(8, int(settings.hot_share * model.node_count))
         self._everywhere = wp.ones(model.node_count, dtype=int, device=dev)
         self._edge_lower = wp.zeros(self.edge_count, dtype=wp.vec3, device=dev)
         self._edge_upper = wp.zeros(self.edge_count, dtype=wp.vec3, device=dev)
         self._edge_tree: wp.Bvh | None = None
         self.searches = 0
+        self.rechecks = 0
         self.direct_checks = 0
         self._limited = bool(np.isfinite(model.element_max_length.numpy()).any())
         self.reverts = 0
@@ -326,7 +338,7 @@ class CrossingGuard:
         first built from, the lists' room on what they once had to hold)."""
         self._edge_tree = None
         self._listed = False
-        self.near = wp.zeros((self.edge_count, NEAR_ROOM), dtype=int, device=self.model.device)
+        self.near = wp.zeros((self.edge_count, self.settings.near_room), dtype=int, device=self.model.device)
 
     def prime(self, x: wp.array) -> None:
         """Record which edges cross at ``x`` (the state before the first step)."""
@@ -352,7 +364,7 @@ class CrossingGuard:
         self.reverted.zero_()
         any_new = False
         for round_ in range(MAX_ROUNDS):
-            if not (self._recheck(x) if round_ else self._check(x)):
+            if not (self._recheck(x) if round_ and self.settings.partial_recheck else self._check(x)):
                 break
             any_new = True
             self._spread(x)
@@ -394,6 +406,8 @@ class CrossingGuard:
         m = self.model
         self.found.zero_()
         hot = 0
+        if not self.settings.keep_lists:
+            self._listed = False
         if self._listed:
             hot = self._mark_moved(x, self.listed_at, 0.5 * self.reach)
             self._listed = hot <= self._most_hot
@@ -424,6 +438,7 @@ class CrossingGuard:
         (GarmentCode's flare dress at rest had reverts in most implicit steps, and each round
         after the first had cost as much as the first)."""
         m = self.model
+        self.rechecks += 1
         self.found.zero_()
         self._refit_mesh(x)
         self._refit_edge_tree(x)
@@ -445,10 +460,10 @@ class CrossingGuard:
             self._edge_tree.refit()
 
     def _moving_fast(self, x: wp.array) -> bool:
-        """Whether more nodes than :data:`HOT_SHARE` allows moved farther than
-        :data:`FAST_SHARE` of the reach, beyond the mean displacement, since the last check:
+        """Whether more nodes than ``hot_share`` allows moved farther than ``fast_share`` of the
+        reach, beyond the mean displacement, since the last check:
         a list made now would be made again within a few checks."""
-        return self._mark_moved(x, self.anchor, FAST_SHARE * self.reach) > self._most_hot
+        return self._mark_moved(x, self.anchor, self.settings.fast_share * self.reach) > self._most_hot
 
     def _mark_moved(self, x: wp.array, since: wp.array, limit: float) -> int:
         """Mark in ``hot`` the nodes that moved farther than ``limit`` [m] from ``since``, beyond

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 import warp as wp
@@ -15,6 +16,7 @@ from .body import MAX_FACES, collide_body, gather_body_faces, gather_body_faces_
 from .body_vertices import (MAX_VERTICES, gather_body_vertices, respond_body_vertices, vertex_boxes,
                             vertices_to_test)
 from .bvh import TriangleBvh
+from .crossing_guard import GuardSettings
 from .cloth import (MAX_CANDIDATES, MAX_CONTACTS, apply_cloth_response, detect_cloth, gather_cloth_triangles,
                     gather_cloth_triangles_bvh, moved_beyond, respond_cloth, searched_velocity, sum_motion)
 from .intervals import AxisIntervalLists
@@ -74,15 +76,20 @@ class CollisionSettings:
         crossing_guard: Check steps' ends for edges newly through triangles and revert them
             (:mod:`party.collision.crossing_guard`).
         guard_every: The guard checks every this many steps.
+        guard: How the guard searches (:class:`~party.collision.crossing_guard.GuardSettings`).
         body_vertices: Cloth triangles respond to the body's vertices as well (ours:
             :mod:`party.collision.body_vertices`), so that no body vertex comes through a
             triangle between the cloth's nodes (only the vertices the cloth could come near are
             tested: :func:`~party.collision.body_vertices.vertices_to_test`); on with the
-            implicit solver (:func:`party.solvers.select.large_step_collision`).
+            implicit solver (:func:`party.collision.presets.large_step`).
         arrive: A node whose step reaches a body's thickness shell from outside is moved onto
             the shell first and takes its response there (ours:
             :func:`party.collision.body.collide_body`); as printed, it stays where it started.
             On with the implicit solver, whose steps left nodes stopped millimetres off the body.
+        landing: Cut a large step into substeps where cloth lands on a body fast
+            (:meth:`CollisionPipeline.landing_substeps`; the implicit solver's).
+        skip_settled: Passes after a Collision()'s first leave out what the last pass left as
+            it was (the same result, bit for bit); False runs every pass over everything.
         exclude_ring: Cloth triangles a node does not collide with: 0, those holding the node
             (the node may not fold through its neighbours' triangles, which keeps sharp folds
             of a coarse net from crossing themselves); 1, also those holding one of its mesh
@@ -100,8 +107,11 @@ class CollisionSettings:
     broad_phase: str = "intervals"
     crossing_guard: bool = False
     guard_every: int = 1
+    guard: GuardSettings = GuardSettings()
     body_vertices: bool = False
     arrive: bool = False
+    landing: bool = True
+    skip_settled: bool = True
 
     def __post_init__(self) -> None:
         if self.broad_phase not in ("intervals", "bvh"):
@@ -113,13 +123,13 @@ class CollisionSettings:
 
 
 @wp.kernel
-def close_pass(touched: wp.array(dtype=int), settled: wp.array(dtype=int), changed: wp.array(dtype=int)):
+def close_pass(touched: wp.array(dtype=int), skip: int, settled: wp.array(dtype=int), changed: wp.array(dtype=int)):
     """After a pass of Collision(): the nodes it left as they were (``touched`` 0) are
-    ``settled`` for the next; count those it changed (flag 1; a node with only
+    ``settled`` for the next (where ``skip``); count those it changed (flag 1; a node with only
     :data:`~party.collision.geometry.PUSH_SPENT` is neither) and clear ``touched``."""
     i = wp.tid()
     settled[i] = 0
-    if touched[i] == 0:
+    if touched[i] == 0 and skip != 0:
         settled[i] = 1
     if (touched[i] & 1) != 0:
         wp.atomic_add(changed, 0, 1)
@@ -171,6 +181,9 @@ class CollisionPipeline:
         self._searched_again = wp.zeros(n, dtype=int, device=dev)
         self._most = wp.ones(1, dtype=int, device=dev)
         self._body_speed = wp.zeros(1, dtype=float, device=dev)
+        self.after_body_search: Callable[..., None] | None = None
+        """Called after each search of the body as ``(pipeline, x, v, state, dt, continuing)``:
+        an observer, for checks of what the searches keep."""
         self._thickness = float(model.node_thickness.numpy().max())
         if self.bvh:
             # each node's shortest edge [m], for the landing substeps and the implicit solver's re-solve
@@ -351,7 +364,8 @@ class CollisionPipeline:
             self.body_pass(x, v, state, dt)
             if k + 1 < passes:
                 self._changed.zero_()
-                launch(close_pass, dim=m.node_count, inputs=[self._touched, self._settled, self._changed], device=dev)
+                launch(close_pass, dim=m.node_count,
+                       inputs=[self._touched, int(self.settings.skip_settled), self._settled, self._changed], device=dev)
                 if int(self._changed.numpy()[0]) == 0:
                     break
 
@@ -363,7 +377,7 @@ class CollisionPipeline:
         interval lists' broad phase, which only the explicit solver's short steps use. Raises
         :class:`~party.errors.SimulationUnstable` where more than
         :data:`~party.collision.landing.MAX_LANDING_SUBSTEPS` would be needed."""
-        if not self.has_body or not self.bvh:
+        if not self.settings.landing or not self.has_body or not self.bvh:
             return 1
         m = self.model
         self._body_speed.zero_()
@@ -451,6 +465,8 @@ class CollisionPipeline:
                           state.collider_q, state.collider_qd, dt, half, everything, int(continuing),
                           self._triangle_ref, self._triangle_step_ref, self._searched_again, self.body_vertices,
                           self.body_vertex_count, self._vertex_distance, self._overflow], dev)
+        if self.after_body_search is not None:
+            self.after_body_search(self, x, v, state, dt, continuing)
 
     def _search_cloth(self, x: wp.array, v: wp.array, dt: float, continuing: bool) -> None:
         """Search the cloth's triangles again for every node: a node stays within margin/2 of

@@ -2,7 +2,7 @@
 
 Collision response keeps a node on the side of a layer it started a step on, so it cannot undo
 a crossing that is already there; sewing, whose panels pass through one another to reach their
-partners (:mod:`party.scenes.garment_sim`), can leave some where a panel folded through itself.
+partners (:mod:`party.garment.sewing`), can leave some where a panel folded through itself.
 Intersection contour minimisation (Volino and Magnenat-Thalmann 2006, "Resolving surface
 collisions through intersection contour minimization") moves the two surfaces of every
 crossing relative to each other along the direction that shortens the curve they intersect

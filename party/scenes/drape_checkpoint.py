@@ -1,6 +1,6 @@
 """Resuming ``party drape``: what a drape has done so far, kept in ``OUT/checkpoint.npz``.
 
-A drape saves its checkpoint after each stage of the sewing (:class:`~.garment_sim.SewingStage`:
+A drape saves its checkpoint after each stage of the sewing (:class:`~party.garment.sewing.SewingStage`:
 the first stage, the closing, each round of the settling), once the garment is sewn, and while
 it drapes at most every :data:`SAVE_SECONDS` of wall time (atomically:
 :func:`~party.output.frames.save_checkpoint`). ``party drape ... --resume`` reads it and goes on
@@ -32,22 +32,31 @@ from ..garment.assemble import Garment
 from ..model import State
 from ..output.frames import load_checkpoint, save_checkpoint
 from ..solvers.relax import RelaxResult
-from .garment_sim import Sewn, SewingStage, sew
+from ..garment.sewing import Sewn, SewingSettings, SewingStage, sew
 
 SAVE_SECONDS = 10.0
 """Least wall time [s] between two saves while draping."""
+
+Saved = Callable[[str, int], None]
+"""``on_save(stage, step)``, called after each save: ``stage`` a sewing stage's name
+(:class:`~party.garment.sewing.SewingStage`: "sewn", "closed", "settling"), "garment" once sewn,
+or "draping"; ``step`` the settling's rounds or the draping's steps (else 0)."""
 
 
 class DrapeCheckpoint:
     """The checkpoint at ``path`` of the drape asked for with ``inputs`` (a JSON-able dict:
     pattern, body, fabric, spacing, solver, ...), which a resumed drape must match; ``run``
     names what it is a checkpoint of in the errors (``party run dress`` keeps its sewing in
-    one: :mod:`.dress`)."""
+    one: :mod:`.dress`). While draping it saves at most every ``save_every`` [s] of wall time;
+    ``on_save`` (:data:`Saved`) hears of every save."""
 
-    def __init__(self, path: Path, inputs: dict, run: str = "drape") -> None:
+    def __init__(self, path: Path, inputs: dict, run: str = "drape", *, save_every: float = SAVE_SECONDS,
+                 on_save: Saved | None = None) -> None:
         self.path = Path(path)
         self.inputs = json.dumps(inputs, sort_keys=True)
         self.run = run
+        self.save_every = save_every
+        self.on_save = on_save
         self._sewn: dict = {}
         self._saved_at = -math.inf
 
@@ -93,6 +102,7 @@ class DrapeCheckpoint:
                     excess=np.asarray(stage.excess, np.float64), rounds=stage.rounds,
                     seam_gaps=np.asarray([] if stage.seam_gaps is None else stage.seam_gaps, np.float64),
                     wall_seconds=wall_seconds)
+        self._said(stage.stage, stage.rounds)
 
     def sewn(self, garment: Garment, saved: dict) -> Sewn:
         """The sewn garment of ``saved`` (:meth:`load`) on ``garment``, the same pattern meshed again."""
@@ -112,14 +122,15 @@ class DrapeCheckpoint:
         return lambda: earlier + time.perf_counter() - started
 
     def sew(self, saved: dict | None, wall: Callable[[], float], garment: Garment, body: Body, fabric: Fabric,
-            **sewing) -> Sewn:
-        """The sewn garment ``saved`` (:meth:`load`) holds; else :func:`~.garment_sim.sew` with
-        ``sewing``'s settings, gone on from the stage ``saved`` had finished (if any), saved
-        after each stage and once sewn with ``wall()`` [s] of the run by then."""
+            settings: SewingSettings, **options) -> Sewn:
+        """The sewn garment ``saved`` (:meth:`load`) holds; else :func:`~party.garment.sewing.sew`
+        with ``settings`` and ``options`` (device, progress), gone on from the stage ``saved``
+        had finished (if any), saved after each stage and once sewn with ``wall()`` [s] of the
+        run by then."""
         if saved is not None and "sewn_points" in saved:
             return self.sewn(garment, saved)
-        sewn = sew(garment, body, fabric, resume=self.sewing_stage(saved),
-                   on_stage=lambda stage: self.save_sewing(stage, wall()), **sewing)
+        sewn = sew(garment, body, fabric, settings, resume=self.sewing_stage(saved),
+                   on_stage=lambda stage: self.save_sewing(stage, wall()), **options)
         self.save_sewn(sewn, wall())
         return sewn
 
@@ -131,15 +142,21 @@ class DrapeCheckpoint:
             "sewn_dt": sewn.dt, "wall_seconds": wall_seconds,
         }
         self._write(**self._sewn)
+        self._said("garment", 0)
 
     def save_draping(self, state: State, step: int, energy: list, wall_seconds: float) -> None:
         """Save the draping ``state`` after ``step`` steps (iterations) with its ``energy`` log
-        [(step, J)], ``wall_seconds`` [s] into the drape; at most every :data:`SAVE_SECONDS`."""
-        if time.perf_counter() - self._saved_at < SAVE_SECONDS:
+        [(step, J)], ``wall_seconds`` [s] into the drape; at most every ``save_every``."""
+        if time.perf_counter() - self._saved_at < self.save_every:
             return
         self._write(**{**self._sewn, "wall_seconds": wall_seconds}, node_q=state.positions(),
                     node_qd=state.velocities(), draping_step=step,
                     draping_energy=np.asarray(energy, np.float64).reshape(-1, 2))
+        self._said("draping", step)
+
+    def _said(self, stage: str, step: int) -> None:
+        if self.on_save is not None:
+            self.on_save(stage, step)
 
     def _write(self, **arrays) -> None:
         self.path.parent.mkdir(parents=True, exist_ok=True)

@@ -18,6 +18,7 @@ default spacing), or goes on with a sewing that was stopped.
 from __future__ import annotations
 
 import time
+from dataclasses import asdict, dataclass
 from importlib import resources
 from pathlib import Path
 
@@ -25,20 +26,20 @@ import numpy as np
 import trimesh
 
 from ..body.dress_form import dress_form
-from ..collision import CollisionSettings
+from ..collision.presets import guarded
 from ..fabric import Fabric, wool_flannel
 from ..garment.assemble import assemble
+from ..garment.sewing import SewingSettings, sew
+from ..garment.worn import garment_model
 from ..output import render
 from ..output.frames import write_json
 from ..pattern import load_pattern
-from ..solvers.select import DEFAULT_DT, check_solver, guard_every, make_solver
-from .drape_checkpoint import DrapeCheckpoint
-from .garment_sim import garment_model, sew
+from ..solvers.explicit.solver import PAPER_DT
+from ..solvers.registry import make_solver, solver_class
+from .drape_checkpoint import DrapeCheckpoint, Saved
 from .scene import Scene, check_timing
 
 PATTERN = "dress_sleeves.json"
-PAPER_DT = 1.0e-4
-"""The paper's time step [s]."""
 WIREFRAME_EVERY = 1000
 """Steps of PAPER_DT between wireframe drawings (figure 13), whichever solver runs."""
 SEWING_CHECKPOINT = "sewn.npz"
@@ -49,35 +50,49 @@ def pattern_path() -> Path:
     return Path(str(resources.files("party.data").joinpath("patterns", PATTERN)))
 
 
-def build(spacing: float | None = None, duration: float | None = None, dt: float | None = None, device: str | None = None,
-          quick: bool = False, size: str = "M", progress: bool = False, solver: str = "explicit",
-          fabric: Fabric | None = None, out: Path | None = None, resume: bool = False) -> Scene:
-    """The dress on dress form ``size`` at ``spacing`` [m] (default 15 mm, with ``quick`` 30 mm) for
-    ``duration`` [s] (default 1.2, with ``quick`` 0.3); ``quick`` coarsens everything for a fast
-    check. ``dt`` [s] defaults to the solver's (the paper's 1e-4 s for the explicit one). With ``out`` the
-    sewing is kept in ``out/sewn.npz``, and with ``resume`` taken from there (see the module
-    docstring; one for another spacing, size, fabric or quickness is refused)."""
-    dt = DEFAULT_DT[check_solver(solver)] if dt is None else dt
-    spacing = spacing if spacing is not None else 0.03 if quick else 0.015
-    duration = duration if duration is not None else 0.3 if quick else 1.2
+@dataclass(frozen=True)
+class Settings:
+    """The dress's options (``party run dress``): the net's ``spacing`` [m] (default 15 mm, with
+    ``quick`` 30 mm), ``duration`` [s] of the fall (default 1.2, with ``quick`` 0.3), the step
+    ``dt`` [s] (default: the solver's, the paper's 1e-4 s for the explicit one), the dress form's
+    ``size``, the solver and the fabric (default: the paper's wool flannel). ``quick`` also
+    sews in fewer iterations."""
+
+    spacing: float | None = None
+    duration: float | None = None
+    dt: float | None = None
+    quick: bool = False
+    size: str = "M"
+    solver: str = "explicit"
+    fabric: Fabric | None = None
+
+
+def build(settings: Settings = Settings(), *, device: str | None = None, out: Path | None = None,
+          resume: bool = False, progress: bool = False, on_save: Saved | None = None) -> Scene:
+    """The dress as ``settings`` say, its kernels on ``device``. With ``out`` the sewing is kept
+    in ``out/sewn.npz`` (``on_save`` hears of each save), and with ``resume`` taken from there
+    (see the module docstring; one for another spacing, size, fabric or quickness is refused)."""
+    solver, quick = settings.solver, settings.quick
+    dt = solver_class(solver).default_dt if settings.dt is None else settings.dt
+    spacing = settings.spacing if settings.spacing is not None else 0.03 if quick else 0.015
+    duration = settings.duration if settings.duration is not None else 0.3 if quick else 1.2
     check_timing(duration, dt)
-    fabric = fabric or wool_flannel()
-    body = dress_form(size)
+    fabric = settings.fabric or wool_flannel()
+    body = dress_form(settings.size)
     garment = assemble(load_pattern(pattern_path()), spacing)
-    max_iterations = 3000 if quick else 8000
+    sewing = SewingSettings(max_iterations=3000 if quick else 8000)
     if out is None:
-        sewn = sew(garment, body, fabric, device=device, max_iterations=max_iterations, progress=progress)
+        sewn = sew(garment, body, fabric, sewing, device=device, progress=progress)
     else:
         inputs = {"scene": "dress", "spacing_m": spacing, "body": body.name, "fabric": fabric.to_dict(),
-                  "sew_iterations": max_iterations}
-        checkpoint = DrapeCheckpoint(Path(out) / SEWING_CHECKPOINT, inputs, run="dress sewing")
+                  "sewing": asdict(sewing)}
+        checkpoint = DrapeCheckpoint(Path(out) / SEWING_CHECKPOINT, inputs, run="dress sewing", on_save=on_save)
         saved = checkpoint.load() if resume else None
-        sewn = checkpoint.sew(saved, checkpoint.wall_clock(saved, time.perf_counter()), garment, body, fabric,
-                              device=device, max_iterations=max_iterations, progress=progress)
+        sewn = checkpoint.sew(saved, checkpoint.wall_clock(saved, time.perf_counter()), garment, body, fabric, sewing,
+                              device=device, progress=progress)
     model = garment_model(sewn.net, fabric, sewn.points, body, device=device, name="dress")
     scene = Scene(
-        name="dress", model=model, solver=make_solver(solver, model, collision=CollisionSettings(crossing_guard=True,
-                                                                                           guard_every=guard_every(dt))),
+        name="dress", model=model, solver=make_solver(solver, model, collision=guarded(dt)),
         dt=dt, duration=duration,
         frame_interval=WIREFRAME_EVERY * PAPER_DT / 2,
         parameters={"spacing": spacing, "duration": duration, "dt": dt, "fabric": fabric.to_dict(), "body": body.name,

@@ -9,6 +9,7 @@ friction (eqs. 8-12) and cloth-cloth contact (eqs. 13-14) together.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,7 +20,7 @@ from ..fabric import Fabric, wool_flannel
 from ..meshing import rectangular_net
 from ..model import ModelBuilder
 from ..solvers import Air
-from ..solvers.select import DEFAULT_DT, check_solver, make_solver
+from ..solvers.registry import make_solver, solver_class
 from .scene import Scene, check_timing
 
 ROD_HEIGHT = 1.0      # m, rod axis above the floor
@@ -46,22 +47,40 @@ def draped_over_rod(uv: np.ndarray, length: float, radius: float, height: float)
     return np.stack([x, y, z], axis=1)
 
 
-def build(*, spacing: float | None = None, duration: float | None = None, wind_speed: float = 4.0,
-          dt: float | None = None, width: float = 0.5, length: float = 0.9, fabric: Fabric | None = None,
-          device: str | None = None, frame_interval: float = 0.02, solver: str = "explicit",
-          quick: bool = False) -> Scene:
-    """The rod-in-the-wind scene. ``spacing`` is the net's node spacing [m] (default 12.5 mm,
-    with ``quick`` 25 mm); ``duration`` [s] (default 1, with ``quick`` 0.2); ``wind_speed``
-    [m/s]; ``dt`` [s] defaults to the solver's (the paper's 1e-4 s for the explicit one)."""
-    dt = DEFAULT_DT[check_solver(solver)] if dt is None else dt
-    spacing = spacing if spacing is not None else 0.025 if quick else 0.0125
-    duration = duration if duration is not None else 0.2 if quick else 1.0
+@dataclass(frozen=True)
+class Settings:
+    """The rod-in-the-wind options (``party run rod-wind``): the net's node ``spacing`` [m]
+    (default 12.5 mm, with ``quick`` 25 mm), ``duration`` [s] (default 1, with ``quick`` 0.2),
+    ``wind_speed`` [m/s], the step ``dt`` [s] (default: the solver's, the paper's 1e-4 s for the
+    explicit one), the cloth's ``width`` and ``length`` [m], the fabric (default: the paper's
+    wool flannel), the time between frames [s] and the solver."""
+
+    spacing: float | None = None
+    duration: float | None = None
+    wind_speed: float = 4.0
+    dt: float | None = None
+    width: float = 0.5
+    length: float = 0.9
+    fabric: Fabric | None = None
+    frame_interval: float = 0.02
+    solver: str = "explicit"
+    quick: bool = False
+
+
+def build(settings: Settings = Settings(), *, device: str | None = None, **_) -> Scene:
+    """The rod-in-the-wind scene as ``settings`` say, its kernels on ``device``."""
+    solver, quick = settings.solver, settings.quick
+    dt = solver_class(solver).default_dt if settings.dt is None else settings.dt
+    spacing = settings.spacing if settings.spacing is not None else 0.025 if quick else 0.0125
+    duration = settings.duration if settings.duration is not None else 0.2 if quick else 1.0
+    width, length, wind_speed, frame_interval = settings.width, settings.length, settings.wind_speed, \
+        settings.frame_interval
     check_timing(duration, dt)
     if not spacing > 0 or spacing > length / 4:
         raise InvalidInput(f"spacing must be positive and below {length / 4} m, got {spacing}")
     if not math.isfinite(wind_speed):
         raise InvalidInput(f"--wind must be a finite speed in m/s, got {wind_speed}")
-    fabric = fabric or wool_flannel()
+    fabric = settings.fabric or wool_flannel()
     net = rectangular_net(width, length, spacing)
     clearance = ROD_RADIUS + 1.5 * fabric.thickness
     builder = ModelBuilder()

@@ -25,7 +25,7 @@ from ..output import images
 from ..output.frames import frame_path, load_checkpoint, save_checkpoint, write_json, write_mesh
 from ..output.folder import OutputFolder, open_output
 from ..output.metrics import ColliderProbe, cloth_crossings, max_elongation
-from ..solvers.explicit.solver import critical_time_step
+from ..solvers.explicit.solver import STABLE_SHARE, critical_time_step
 from ..solvers.memory import forget, memory, restore
 from .scene import Scene
 
@@ -58,9 +58,10 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     model, dt = scene.model, scene.dt
     out = Path(out)
     critical = critical_time_step(model)
-    if hasattr(scene.solver, "critical_time_step") and dt > critical:
-        raise InvalidInput(f"time step {dt:g} s exceeds this net's explicit stability limit {critical:.3g} s; "
-                           f"use --dt {_round_down(critical * 0.9):g} or a coarser --spacing")
+    stable = scene.solver.stable_time_step()
+    if dt > stable:
+        raise InvalidInput(f"time step {dt:g} s exceeds this net's {scene.solver.name} stability limit {stable:.3g} s; "
+                           f"use --dt {_round_down(stable * STABLE_SHARE):g} or a coarser --spacing")
     steps_per_frame = max(int(round(scene.frame_interval / dt)), 1)
     steps_total = max(int(round(scene.duration / dt)), 1)
     frames_total = -(-steps_total // steps_per_frame)  # the last frame shorter where the duration ends within it
@@ -121,8 +122,7 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
                     scene.solver.step(state, scratch, control, dt)
                     state, scratch = scratch, state
                     pace.stepped()
-                if hasattr(scene.solver, "end"):  # a crossing check the guard's interval left pending
-                    scene.solver.end.flush(state)
+                scene.solver.flush(state)
                 wp.synchronize_device(model.device)
                 totals["wall_seconds"] += time.perf_counter() - start
                 points = state.positions()

@@ -7,6 +7,8 @@ off. Blender and Newton run the same scene in ``benchmarks/peers/``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..body import sphere
@@ -15,7 +17,7 @@ from ..errors import InvalidInput
 from ..fabric import Fabric, fabric_by_name
 from ..meshing import rectangular_net
 from ..model import ModelBuilder
-from ..solvers.select import DEFAULT_DT, check_solver, make_solver
+from ..solvers.registry import make_solver, solver_class
 from .scene import Scene, check_timing
 
 SPHERE_RADIUS = 0.3   # m
@@ -24,19 +26,33 @@ DROP_HEIGHT = 0.62    # m, the cloth's plane above the sphere's centre
 FABRIC = "cotton"     # the library fabric the scene drops (the peers are given it too)
 
 
-def build(*, grid: int | None = None, self_collision: bool = True, solver: str = "implicit",
-          fabric: Fabric | str = FABRIC, duration: float | None = None, dt: float | None = None,
-          device: str | None = None, quick: bool = False) -> Scene:
-    """The sphere-drop scene with ``grid`` x ``grid`` nodes (default 64, with ``quick`` 24) for
-    ``duration`` [s] (default 1, with ``quick`` 0.5); ``dt`` defaults to the solver's."""
-    check_solver(solver)
-    dt = DEFAULT_DT[solver] if dt is None else dt
-    grid = grid if grid is not None else 24 if quick else 64
-    duration = duration if duration is not None else 0.5 if quick else 1.0
+@dataclass(frozen=True)
+class Settings:
+    """The sphere drop's options (``party run sphere-drop``): ``grid`` x ``grid`` nodes (default
+    64, with ``quick`` 24), cloth-cloth collision on or off, the solver, the fabric (a library
+    name or a Fabric), ``duration`` [s] (default 1, with ``quick`` 0.5) and the step ``dt`` [s]
+    (default: the solver's)."""
+
+    grid: int | None = None
+    self_collision: bool = True
+    solver: str = "implicit"
+    fabric: Fabric | str = FABRIC
+    duration: float | None = None
+    dt: float | None = None
+    quick: bool = False
+
+
+def build(settings: Settings = Settings(), *, device: str | None = None, **_) -> Scene:
+    """The sphere-drop scene as ``settings`` say, its kernels on ``device``."""
+    solver = settings.solver
+    dt = solver_class(solver).default_dt if settings.dt is None else settings.dt
+    grid = settings.grid if settings.grid is not None else 24 if settings.quick else 64
+    duration = settings.duration if settings.duration is not None else 0.5 if settings.quick else 1.0
     check_timing(duration, dt)
     if not 2 <= grid <= 1000:
         raise InvalidInput(f"--grid must lie in 2-1000 nodes per side, got {grid}")
-    fabric = fabric_by_name(fabric) if isinstance(fabric, str) else fabric
+    fabric = fabric_by_name(settings.fabric) if isinstance(settings.fabric, str) else settings.fabric
+    self_collision = settings.self_collision
     spacing = CLOTH_SIZE / (grid - 1)
     net = rectangular_net(CLOTH_SIZE, CLOTH_SIZE, spacing)
     builder = ModelBuilder()

@@ -1,7 +1,7 @@
 """The plastic limit's serial sweeps over worklists instead of over every element.
 
 A step's plastic limit sweeps the elements in colour order until none is beyond its limit
-(:meth:`~party.solvers.step_end.StepEnd._apply_plastic_limit`). After the first sweep only the
+(:meth:`~party.solvers.plastic_limit.PlasticLimit.apply`). After the first sweep only the
 elements at a node that a correction has moved since the last sweep began can change anything
 (:func:`~party.solvers.explicit.kernels.limit_element`); a garment at rest against a body keeps
 some hundreds of its ten thousand elements at work for all 32 sweeps of both limits of a step,
@@ -21,7 +21,7 @@ import warp as wp
 
 from ..model import Model
 from ..model.csr import csr_order
-from .explicit.kernels import PlasticLimit, limit_element
+from .explicit.kernels import LimitArrays, limit_element
 
 wp.set_module_options({"enable_backward": False})  # no adjoints: party never differentiates its kernels
 
@@ -34,7 +34,7 @@ garment drape), well short of a 32-bit integer's range."""
 class LimitWorklists:
     """Where the serial sweeps keep their worklists.
 
-    ``color_offsets``: colour c's slots of ``PlasticLimit.colored`` are ``color_offsets[c]`` to
+    ``color_offsets``: colour c's slots of ``LimitArrays.colored`` are ``color_offsets[c]`` to
     ``color_offsets[c + 1] - 1``; ``slot_color``: the colour of each slot. ``node_slot_offsets``,
     ``node_slots``: per node (CSR) the slots of the limited elements at it. ``lists`` (2,
     slots): the slots queued for the sweeps of even and odd number, colour c's from
@@ -93,7 +93,7 @@ def _queue(work: LimitWorklists, node: int, color: int, mark: int, now: int, lat
 
 
 @wp.func
-def _visit(limit: PlasticLimit, work: LimitWorklists, slot: int, color: int, x: wp.array(dtype=wp.vec3),
+def _visit(limit: LimitArrays, work: LimitWorklists, slot: int, color: int, x: wp.array(dtype=wp.vec3),
            v: wp.array(dtype=wp.vec3), dt: float, over_relaxation: float, sweep: int,
            moved_in: wp.array(dtype=int), mark: int, now: int, later: int) -> int:
     """:func:`limit_element` on the element in ``slot``, queueing the elements at the nodes
@@ -112,7 +112,7 @@ def _visit(limit: PlasticLimit, work: LimitWorklists, slot: int, color: int, x: 
 
 
 @wp.kernel
-def plastic_limit_worklists(limit: PlasticLimit, work: LimitWorklists, x: wp.array(dtype=wp.vec3),
+def plastic_limit_worklists(limit: LimitArrays, work: LimitWorklists, x: wp.array(dtype=wp.vec3),
                             v: wp.array(dtype=wp.vec3), dt: float, over_relaxation: float, max_sweeps: int,
                             moved_in: wp.array(dtype=int), sweeps: wp.array(dtype=int)):
     """Every sweep of the plastic limit in one thread (the CPU's serial launch), as

@@ -63,9 +63,13 @@ STEADY_DC = 5e-4  # or when DC changes by less than this (0.05 points) and the n
 FALL_STEP = 1.0e-3
 """Time step [s] of the implicit solver's drape tests: a specimen's folds are decided as it
 falls, and backward Euler at the solver's own 1/300 s damps the fall's bending and lets the
-specimen drape further, in more folds. Measured fabric B (case 7, three specimens; explicit
-solver DC 42.8 %, 5.67 folds) drapes to 39.9 % and 6.67 folds at 1/300 s, 40.6 % and 6.33 at
-1/500 s, 42.8 % and 5.67 at 1/1,000 s, 45.0 % and 6 at 1/2,000 s."""
+specimen drape further, in more folds; at a third of the solver's step a specimen drapes as with
+the explicit solver."""
+
+FALL = {"explicit": {}, "implicit": {"dt": FALL_STEP, "iterations": DRAPE_SWEEPS}}
+"""How each solver lets a specimen fall (:class:`~party.solvers.settle.SettleSettings`' fields):
+the explicit solver at its own step, the implicit one at :data:`FALL_STEP` with the drape's
+sweeps."""
 MEASURED = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "fabrics" / "cusick_matsudaira2015.csv"
 
 
@@ -203,9 +207,9 @@ def specimen_panel(radius: float) -> Panel:
 
 
 def drape_test(fabric: Fabric, solver: str, spacing: float, *, drapemeter: Drapemeter = BS_5058,
-               seed: int = 0) -> Drape:
+               seed: int = 0, fall: dict | None = None) -> Drape:
     """Drape the specimen of ``fabric`` on ``drapemeter`` at node ``spacing`` [m] to rest and
-    measure it."""
+    measure it; ``fall`` overrides the solver's :data:`FALL` settings."""
     if not spacing > 0:
         raise InvalidInput(f"Cusick spacing must be positive, got {spacing}")
     mesh = mesh_panel(specimen_panel(drapemeter.specimen_radius), spacing, thread_ends=True)
@@ -226,9 +230,8 @@ def drape_test(fabric: Fabric, solver: str, spacing: float, *, drapemeter: Drape
         return abs(now.coefficient - then.coefficient) < STEADY_DC and now.nodes == then.nodes
 
     try:
-        implicit = {"dt": FALL_STEP, "iterations": DRAPE_SWEEPS} if solver == "implicit" else {}
         state, _ = settle(model, solver, collision=CollisionSettings(cloth=True), rest_speed=REST_SPEED,
-                          check_every=REST_WINDOW, steady=steady, **implicit)
+                          check_every=REST_WINDOW, steady=steady, **(FALL[solver] if fall is None else fall))
     except SimulationUnstable as problem:
         raise SimulationUnstable(f"Cusick drape of {fabric.name} at {spacing * 1000:.1f} mm: {problem}") from None
     rest = state.positions()

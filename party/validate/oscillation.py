@@ -14,8 +14,9 @@ import numpy as np
 from ..fabric import Fabric
 from ..meshing import rectangular_net
 from ..model import ModelBuilder
+from ..solvers.registry import solver_class
 from .checks import CaseResult, Check
-from .simulate import dynamics_time_step, run
+from .simulate import run
 
 NAME = "oscillation"
 TOLERANCE = 0.01  # relative period error
@@ -67,7 +68,7 @@ def strip_period(fabric: Fabric, solver: str, *, spacing: float) -> tuple[float,
 def _period(model, solver: str, nodes, expected: float, *, axis: int, offset: float) -> float:
     """Mean time [s] between upward zero crossings of the nodes' mean displacement, over three
     expected periods."""
-    dt = dynamics_time_step(model, solver, resolve_period=expected)
+    dt = solver_class(solver).dynamics_step(model, resolve_period=expected)
     nodes = np.atleast_1d(nodes)
     trace = []
     run(model, solver, 3.2 * expected, dt=dt, collision=None,

@@ -9,7 +9,8 @@ from ..body import floor
 from ..fabric import Fabric
 from ..model import ModelBuilder
 from .checks import CaseResult, Check
-from .simulate import dynamics_time_step, run
+from ..solvers.registry import solver_class
+from .simulate import run
 
 NAME = "restitution"
 TOLERANCE = 0.01  # relative
@@ -33,7 +34,7 @@ def bounce_ratio(fabric: Fabric, solver: str, height: float) -> float:
     node = builder.add_node((0.0, 0.0, fabric.thickness + height), 1e-4, fabric=fabric)
     builder.add_collider(floor(0.0, size=4.0))
     model = builder.finalize()
-    dt = dynamics_time_step(model, solver)
+    dt = solver_class(solver).dynamics_step(model)
     g = -model.gravity[2]
     state = model.state(velocity=(SIDE_SPEED, 0.0, 0.0))
     previous = state.velocities()[node, 2]

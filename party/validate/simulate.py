@@ -7,14 +7,12 @@ from typing import Callable
 import numpy as np
 
 from ..collision import CollisionSettings
+from ..collision.presets import BODY_ONLY
 from ..errors import SimulationUnstable
 from ..model import Model, State
-from ..solvers.select import make_solver
-from ..solvers.settle import dynamics_time_step
+from ..solvers.registry import make_solver, solver_class
+from ..solvers.settle import SettleSettings
 from ..solvers.settle import settle as settle_model
-
-BODY_ONLY = CollisionSettings(cloth=False)
-"""Collision against bodies only: the single-layer cases never fold onto themselves."""
 
 STEADY_WINDOW = 0.5
 """Time [s] between the checks of :func:`settle_until_unchanged`."""
@@ -25,7 +23,7 @@ def run(model: Model, solver: str, seconds: float, *, dt: float | None = None,
         resolve_period: float | None = None) -> State:
     """Integrate ``model`` from its set-up state for ``seconds`` [s], calling ``observe(state)``
     after every step; returns the final state."""
-    dt = dt or dynamics_time_step(model, solver, resolve_period)
+    dt = dt or solver_class(solver).dynamics_step(model, resolve_period)
     stepper = make_solver(solver, model, collision=collision)
     state, scratch = model.state(), model.state()
     control = model.control()
@@ -38,10 +36,11 @@ def run(model: Model, solver: str, seconds: float, *, dt: float | None = None,
 
 
 def settle(model: Model, solver: str, *, collision: CollisionSettings | None = BODY_ONLY, **options) -> tuple[State, int]:
-    """:func:`party.solvers.settle.settle` (body collision only unless told), which must come to
-    rest: raises :class:`SimulationUnstable` when it does not. Returns the rest state and the
-    steps taken."""
-    settled = settle_model(model, solver, collision=collision, **options)
+    """:func:`party.solvers.settle.settle` (body collision only unless told; ``options``: the
+    other fields of :class:`~party.solvers.settle.SettleSettings`), which must come to rest:
+    raises :class:`SimulationUnstable` when it does not. Returns the rest state and the steps
+    taken."""
+    settled = settle_model(model, solver, SettleSettings(collision=collision, **options))
     if not settled.at_rest:
         raise SimulationUnstable(f"the {solver} solver did not come to rest in {settled.seconds:g} s")
     return settled.state, settled.steps

@@ -86,7 +86,7 @@ def end_of_step_span(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), i: 
 
 
 @wp.struct
-class PlasticLimit:
+class LimitArrays:
     """What every sweep of the plastic limit reads: the elements in colour order (``colored``,
     element ids), their nodes and longest lengths (1 + L_sh) l0 [m], the nodes' inverse masses
     [1/kg], the relative ``tolerance`` beyond the limit that counts, and ``skip_unchanged``
@@ -101,7 +101,7 @@ class PlasticLimit:
 
 
 @wp.func
-def limit_element(limit: PlasticLimit, e: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
+def limit_element(limit: LimitArrays, e: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
                   over_relaxation: float, sweep: int, moved_in: wp.array(dtype=int)) -> int:
     """f_plas (section 5, figure 5) on element e: an element may not stretch beyond
     (1 + L_sh) l0.
@@ -110,7 +110,7 @@ def limit_element(limit: PlasticLimit, e: int, x: wp.array(dtype=wp.vec3), v: wp
     would pass the limit, the relative velocity that stretches it further is cancelled (split
     by inverse mass), which is the force component f_plas removes; ``over_relaxation`` > 1
     cancels that much more (projected successive over-relaxation, see
-    :class:`~party.solvers.step_end.StepEnd`). Returns 1 where the element was beyond (1 +
+    :class:`~party.solvers.plastic_limit.PlasticLimit`). Returns 1 where the element was beyond (1 +
     ``tolerance``) times its limit.
 
     Each node a correction changes is marked in ``moved_in`` with the number of the sweep
@@ -147,7 +147,7 @@ def limit_element(limit: PlasticLimit, e: int, x: wp.array(dtype=wp.vec3), v: wp
 
 
 @wp.kernel
-def plastic_limit(limit: PlasticLimit, offset: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+def plastic_limit(limit: LimitArrays, offset: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
                   dt: float, over_relaxation: float, sweep_number: wp.array(dtype=int), moved_in: wp.array(dtype=int),
                   over: wp.array(dtype=int)):
     """One colour's share of a sweep of the plastic limit (:func:`limit_element`), in the sweep
@@ -160,7 +160,7 @@ def plastic_limit(limit: PlasticLimit, offset: int, x: wp.array(dtype=wp.vec3), 
 
 
 @wp.kernel
-def plastic_limit_sweeps(limit: PlasticLimit, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
+def plastic_limit_sweeps(limit: LimitArrays, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dt: float,
                          over_relaxation: float, max_sweeps: int, moved_in: wp.array(dtype=int),
                          sweeps: wp.array(dtype=int)):
     """Every sweep of the plastic limit in one thread (the CPU's serial launch): sweeps over

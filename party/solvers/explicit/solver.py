@@ -10,8 +10,17 @@ from ...errors import InvalidInput
 from ...launch import launch
 from ...model import Control, Model, State
 from ..aero import Air, AirForces
-from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
+from ..filters import StepFilters
+from ..plastic_limit import OVER_RELAXATION
 from .kernels import hinge_forces, kinetic_damping, net_forces_and_velocity
+
+
+PAPER_DT = 1.0e-4
+"""The paper's time step [s] (section 7), on a net of about 1 cm."""
+
+STABLE_SHARE = 0.9
+"""Share of :func:`critical_time_step` that relaxations and dynamics step at: the limit is
+computed for the net at rest, and stretched or compressed cloth is a little stiffer."""
 
 
 class SolverExplicit:
@@ -34,10 +43,15 @@ class SolverExplicit:
         kinetic_damping: ``(max_speed [m/s], keep [-])`` to filter v* for static relaxation
             (:mod:`party.solvers.relax`); None for dynamics. Dynamics applies the paper's f_plas
             as it is; relaxation, which seeks only the rest shape, over-relaxes its sweeps
-            (:class:`~party.solvers.step_end.StepEnd`), and where it holds the body's vertices
+            (:class:`~party.solvers.filters.StepFilters`), and where it holds the body's vertices
             off the cloth (``collision.body_vertices``) enforces the limit again after contact,
             as the implicit solver does: their push on a tight hem otherwise outran the limit.
     """
+
+    name = "explicit"
+    default_dt = PAPER_DT
+    settle_seconds = 30.0
+    creep = 1.0
 
     def __init__(self, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
                  air: Air | None = None, plastic_passes: int = 32,
@@ -48,14 +62,44 @@ class SolverExplicit:
         self.model = model
         self.kinetic_damping = kinetic_damping
         relaxing = kinetic_damping is not None
-        self.end = StepEnd(model, collision, plastic_passes, max_speed=kinetic_damping[0] if relaxing else None,
-                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION if relaxing else 1.0,
+        self.filters = StepFilters(model, collision, plastic_passes, max_speed=kinetic_damping[0] if relaxing else None,
+                           plastic_over_relaxation=OVER_RELAXATION if relaxing else 1.0,
                            limit_after_contact=relaxing and collision is not None and collision.body_vertices)
-        self.collision = self.end.collision
+        self.collision = self.filters.collision
         self.air = AirForces(model, air) if air is not None else None
         self._f_ext = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)
         self._bending_stiffness = wp.array((model.host["hinge_stiffness"] + model.host["hinge_friction"]).astype(np.float32),
                                            dtype=float, device=model.device)
+
+    @classmethod
+    def configured(cls, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
+                   air: Air | None = None, static: bool = False, kinetic_damping: tuple[float, float] | None = None,
+                   **implicit_only) -> "SolverExplicit":
+        """The paper's integrator with its Collision() as printed (``static`` changes nothing:
+        the explicit step is the same whatever the run seeks)."""
+        given = [name for name, value in implicit_only.items() if value is not None]
+        if given:
+            raise InvalidInput(f"{', '.join(given)} apply to the implicit solver only")
+        return cls(model, collision=collision, air=air, kinetic_damping=kinetic_damping)
+
+    @classmethod
+    def relaxation_step(cls, model: Model) -> float:
+        """:data:`STABLE_SHARE` of the stability limit (which allows for the dampers)."""
+        return STABLE_SHARE * critical_time_step(model)
+
+    @classmethod
+    def dynamics_step(cls, model: Model, resolve_period: float | None = None) -> float:
+        """The paper's step, or :data:`STABLE_SHARE` of the stability limit where that is
+        shorter; any motion is resolved at steps that small."""
+        return min(cls.default_dt, STABLE_SHARE * critical_time_step(model))
+
+    def stable_time_step(self) -> float:
+        """See :meth:`critical_time_step`."""
+        return self.critical_time_step()
+
+    def flush(self, state: State) -> None:
+        """Run a crossing check that the guard's interval has left pending."""
+        self.filters.flush(state)
 
     def critical_time_step(self) -> float:
         """Largest stable dt [s] of the net at rest with its dampers. For one mode
@@ -82,7 +126,7 @@ class SolverExplicit:
             launch(hinge_forces, dim=m.hinge_count,
                    inputs=[state_in.node_q, m.hinge_nodes, m.hinge_weights, self._bending_stiffness, self._f_ext],
                    device=dev)
-            self.end.hysteresis.add_forces(state_in, self._f_ext)
+            self.filters.hysteresis.add_forces(state_in, self._f_ext)
         launch(net_forces_and_velocity, dim=m.node_count,
                inputs=[state_in.node_q, state_in.node_qd, m.node_inv_mass, m.node_element_offsets,
                        m.node_element_ids, m.element_nodes, m.element_rest_length, m.element_stiffness,
@@ -91,7 +135,7 @@ class SolverExplicit:
         if self.kinetic_damping is not None:
             launch(kinetic_damping, dim=m.node_count,
                    inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=dev)
-        self.end.finish(state_in, state_out, dt)
+        self.filters.finish(state_in, state_out, dt)
 
 
 def critical_time_step(model: Model) -> float:

@@ -10,6 +10,7 @@ import numpy as np
 import warp as wp
 
 from ...collision import CollisionSettings
+from ...collision.presets import large_step
 from ...errors import InvalidInput
 from ...launch import launch, launch_items, launch_workers, worker_count, worker_sync
 from ...model import Control, Model, State
@@ -17,7 +18,8 @@ from ...model.csr import csr_order
 from ..aero import Air, AirForces
 from ..explicit.kernels import kinetic_damping
 from ..hysteresis import slip_in_world
-from ..step_end import PLASTIC_OVER_RELAXATION, StepEnd
+from ..filters import StepFilters
+from ..plastic_limit import OVER_RELAXATION
 from .descent import DESCENT, DescentTerms
 from .kernels import (body_planes, chebyshev_blend, contact_changes, contact_region, contact_resolve_start,
                       contact_resolved_velocity, inertial_target, onto_planes, record_correction, spread_region,
@@ -76,7 +78,7 @@ class SolverImplicit:
     stable for every library fabric (tested), at the cost of the stiffest modes being damped
     and, for stiff fabrics at few sweeps, an approximate solve (see docs/design.md).
 
-    The step ends as the explicit one does (:class:`party.solvers.step_end.StepEnd`): the
+    The step ends as the explicit one does (:class:`party.solvers.filters.StepFilters`): the
     velocity the solve proposes, v* = (x - x(t)) / dt, goes through the plastic limit and the
     paper's Collision() (continuous node-along-step detection against bodies and cloth, the
     friction cone, restitution and the body's velocity, eqs. 8-14), then eq. (4). Contact is
@@ -96,14 +98,22 @@ class SolverImplicit:
             none; fixed once the first step has been recorded).
         collision: Collision settings; ``None`` switches collision off.
         air: Wind and air drag; ``None`` for none.
-        plastic_passes: See :class:`~party.solvers.step_end.StepEnd`; the sweeps are
-            over-relaxed by :data:`~party.solvers.step_end.PLASTIC_OVER_RELAXATION`.
+        plastic_passes: See :class:`~party.solvers.filters.StepFilters`; the sweeps are
+            over-relaxed by :data:`~party.solvers.plastic_limit.OVER_RELAXATION`.
         kinetic_damping: ``(max_speed [m/s], keep [-])`` to filter v* for static relaxation
             (:mod:`party.solvers.relax`); None for dynamics.
         contact_rounds: Re-solves of the cloth around the nodes Collision() stopped, per
             (sub)step (:meth:`resolve_contacts`); 0 for none. Runs that seek only a rest shape
             (static relaxation, :func:`~party.solvers.settle.settle`) take none.
     """
+
+    name = "implicit"
+    default_dt = 1.0 / 300.0
+    """A 60 Hz frame in five steps."""
+    settle_seconds = 300.0
+    creep = 0.2
+    """Its sweeps, cut short in finely meshed stiff cloth, let the last millimetres creep in over
+    tens of seconds: a settling asks it for a five times slower creep."""
 
     carried = ("_correction",)
     """What the next step reads of the last (:mod:`party.solvers.memory`): the correction the
@@ -120,12 +130,12 @@ class SolverImplicit:
         self.iterations = int(iterations)
         if collision is not None:
             collision = replace(collision, broad_phase="bvh")
-        self.end = StepEnd(model, collision, plastic_passes, limit_after_contact=True,
+        self.filters = StepFilters(model, collision, plastic_passes, limit_after_contact=True,
                            max_speed=kinetic_damping[0] if kinetic_damping is not None else None,
-                           plastic_over_relaxation=PLASTIC_OVER_RELAXATION,
+                           plastic_over_relaxation=OVER_RELAXATION,
                            contact_resolve=self.resolve_contacts if contact_rounds > 0 else None,
                            contact_rounds=contact_rounds)
-        self.collision = self.end.collision
+        self.collision = self.filters.collision
         self.air = AirForces(model, air) if air is not None else None
         dev = model.device
         n = model.node_count
@@ -184,6 +194,38 @@ class SolverImplicit:
         self._graphs: dict = {}
         self._capture = True
 
+    @classmethod
+    def configured(cls, model: Model, *, collision: CollisionSettings | None = CollisionSettings(),
+                   air: Air | None = None, static: bool = False, kinetic_damping: tuple[float, float] | None = None,
+                   iterations: int | None = None, contact_rounds: int | None = None) -> "SolverImplicit":
+        """The implicit solver with :func:`~party.collision.presets.large_step` collision; runs
+        that seek only a rest shape (``static``: relaxations, settling) take no contact re-solves
+        (:meth:`resolve_contacts`): they are judged by the rest shape, whose stretch the plastic
+        limit takes up over the steps after."""
+        rounds = 0 if static else (CONTACT_ROUNDS if contact_rounds is None else contact_rounds)
+        return cls(model, collision=large_step(collision), air=air, kinetic_damping=kinetic_damping,
+                   contact_rounds=rounds, **({} if iterations is None else {"iterations": iterations}))
+
+    @classmethod
+    def relaxation_step(cls, model: Model) -> float:
+        """Its default step: large steps are what it is for."""
+        return cls.default_dt
+
+    @classmethod
+    def dynamics_step(cls, model: Model, resolve_period: float | None = None) -> float:
+        """Its default step, or 1/200 of ``resolve_period`` [s] where a motion of that period
+        must be resolved (backward Euler's period error is then (2 pi / 200)^2 / 3, about 0.03 %)."""
+        return cls.default_dt if resolve_period is None else min(cls.default_dt, resolve_period / 200.0)
+
+    def stable_time_step(self) -> float:
+        """Any step: backward Euler is unconditionally stable (stiff cloth takes more sweeps
+        and substeps instead, :meth:`sweeps`, :meth:`substeps`)."""
+        return math.inf
+
+    def flush(self, state: State) -> None:
+        """Run a crossing check that the guard's interval has left pending."""
+        self.filters.flush(state)
+
     def step(self, state_in: State, state_out: State, control: Control, dt: float) -> None:
         """Advance ``state_in`` by ``dt`` [s] into ``state_out`` (distinct objects; swap after),
         in :meth:`substeps` equal substeps, or more where cloth lands on a body
@@ -206,7 +248,7 @@ class SolverImplicit:
 
     def worker_yields(self) -> int:
         """How often a sweep worker thread, waiting for the others, has given its core away
-        (:data:`~party.launch.YIELD_AFTER_SPINS`; a running count, read from the device). A 64 x
+        (after :class:`~party.launch.LaunchSettings`' ``yield_after_spins``; a running count, read from the device). A 64 x
         64 sheet's steps gave it away some 160 times a step alone and some 1,500 beside a busy
         process."""
         return int(self._sync.counters.numpy()[3])
@@ -265,12 +307,12 @@ class SolverImplicit:
         if self.kinetic_damping is not None:
             launch(kinetic_damping, dim=m.node_count,
                    inputs=[state_in.node_qd, state_out.node_qd, *map(float, self.kinetic_damping)], device=m.device)
-        self.end.finish(state_in, state_out, dt)
+        self.filters.finish(state_in, state_out, dt)
 
     def resolve_contacts(self, state_in: State, state_out: State, x_before: wp.array, v_before: wp.array, dt: float,
                          first: bool) -> wp.array | None:
         """Solve the step again for the cloth around the nodes the last Collision() stopped
-        (:data:`~party.solvers.step_end.ContactResolve`; ours, after the constraint filtering
+        (:data:`~party.solvers.filters.ContactResolve`; ours, after the constraint filtering
         of Baraff and Witkin 1998). Collision()'s eqs. (8)-(14) change a node's velocity after
         the solve; over the paper's 0.1 ms the springs spread that change to its neighbours in
         the next steps, but over a large step a node that meets another layer stops within the
@@ -281,7 +323,7 @@ class SolverImplicit:
         edge take :data:`CONTACT_SWEEPS` sweeps of the same implicit step from where they are,
         so that they follow the held nodes within the step. Returns the nodes re-solved
         (None where none was moved so far; reads one number from the device). Called only
-        where the model has cloth collision (:class:`~party.solvers.step_end.StepEnd`). On the
+        where the model has cloth collision (:class:`~party.solvers.filters.StepFilters`). On the
         CPU (``serial_region``) the sweeps visit the re-solved nodes alone, listed by a
         breadth-first search from the moved ones on one thread
         (:func:`~.kernels.contact_region`); on a GPU the region grows ring by ring, a thread per

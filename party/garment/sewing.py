@@ -1,0 +1,294 @@
+"""Sewing a garment onto a body: the panels placed round it, pulled together by sewing springs,
+closed, joined into one net and settled, all by static relaxation (the paper's iteration
+ignoring inertia, section 7) with the paper's explicit steps.
+
+Cloth-cloth collision waits for the merge: while springs pull the panels together, panels that
+meet at an armpit (front, back and two sleeve halves) would collide with one another short of
+their partners and keep seams open. A crossing made while sewing would stay in the garment, since
+collision response keeps each node on the side of a layer it is on, so the joined garment's
+crossings are undone (:func:`party.collision.untangle.untangle`) before it settles with
+cloth-cloth collision on, and once more after.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import numpy as np
+
+from ..body.body import Body
+from ..collision import presets
+from ..collision.untangle import untangle
+from ..errors import SimulationUnstable
+from ..fabric import Fabric
+from ..meshing.net import ClothNet
+from ..model import Model, ModelBuilder
+from ..progress import relax_progress
+from ..solvers.explicit import SolverExplicit
+from ..solvers.relax import KINETIC_MOMENTUM, RelaxResult, StaticRelaxation
+from .assemble import Garment
+from .dressing import dress
+from .worn import garment_model
+
+
+@dataclass(frozen=True)
+class SewingSettings:
+    """How a garment is sewn (:func:`sew`).
+
+    Attributes:
+        max_iterations: Iterations of the first stage's round (the closing and each settling
+            round take a quarter, at least 200).
+        rounds: Most rounds of the first stage while a seam is still more than ``open_gap``
+            apart [m] and its energy has not settled: stiff fabrics take smaller explicit steps
+            and so need more of them to close.
+        open_gap: See ``rounds`` [m].
+        closed_gap: Largest distance [m] between paired seam nodes that the closing allows: the
+            sewing springs get a plastic limit of this length, which pulls the last millimetres
+            shut as a constraint where the cloth pulls against the springs.
+        seam_rest_length: Rest length of a sewing spring [m] (zero in effect; a spring needs a
+            direction).
+        seam_stiffness: Sewing spring constant as a multiple of the fabric's median element
+            constant: stiff enough to close seams to well under a millimetre against the
+            cloth's pull. It sets the first stage's stable step.
+        momentum: Velocity kept per iteration of the first stage (kinetic damping).
+        sewing_speed: Speed cap [m/s] of the first stage, whose panels travel far.
+        settling_speed: Speed cap [m/s] of the closing and the settling: no node moves beyond
+            the collision search in one iteration.
+        exchange: The settling's cloth-cloth exchange (gamma, kappa of eqs. 13-14): with both 1 a
+            contact only stops the approach along its normal and leaves the sliding as it was,
+            as the sewing leaves out skin friction; the fabric's own would cut a node's whole
+            velocity in contact, and with it what the plastic limit asks of it.
+        settling_rounds: Most rounds of the settling (the joined garment under its plastic
+            limit): they go on while elements are stretched beyond ``overstretched`` times rest
+            and each round cuts the elements' total length beyond their limits by at least
+            ``settling_progress`` of what it was. The first stage, which has no plastic limit,
+            can leave a panel stretched where seams pulled it faster than it could slide; a
+            pattern smaller than its wearer stays stretched however long it settles, and stops
+            once a round shows it. Progress is the excess, not the count of stretched
+            elements: as the limit pulls a panel back, its stretch gathers in the few elements
+            the body holds out, whose count may rise for a round while the whole falls.
+        overstretched: See ``settling_rounds`` [-].
+        settling_progress: See ``settling_rounds`` [-].
+    """
+
+    max_iterations: int = 6000
+    rounds: int = 4
+    open_gap: float = 0.01
+    closed_gap: float = 5.0e-4
+    seam_rest_length: float = 1.0e-4
+    seam_stiffness: float = 4.0
+    momentum: float = KINETIC_MOMENTUM
+    sewing_speed: float = 4.0
+    settling_speed: float = 1.0
+    exchange: tuple[float, float] = (1.0, 1.0)
+    settling_rounds: int = 10
+    overstretched: float = 1.5
+    settling_progress: float = 0.05
+
+    @property
+    def stage_iterations(self) -> int:
+        """Iterations of the closing and of each settling round."""
+        return max(self.max_iterations // 4, 200)
+
+
+@dataclass
+class Sewn:
+    """A garment after sewing.
+
+    Attributes:
+        garment: The meshed pattern.
+        net: The sewn net (seam nodes merged).
+        node_map: Garment node -> sewn node.
+        points: Sewn node positions [m].
+        seam_gaps: Per pattern seam, the largest distance [m] between its paired nodes when
+            they were merged.
+        relaxation: The sewing relaxation's log (panels and sewing springs).
+        settling: The log of the joined garment's relaxation that follows (plastic limit on).
+        dt: Pseudo time step of the relaxation [s].
+    """
+
+    garment: Garment
+    net: ClothNet
+    node_map: np.ndarray
+    points: np.ndarray
+    seam_gaps: np.ndarray
+    relaxation: RelaxResult
+    settling: RelaxResult
+    dt: float
+
+    @property
+    def max_seam_gap(self) -> float:
+        """Largest seam gap [m] when the seams were joined."""
+        return float(self.seam_gaps.max()) if len(self.seam_gaps) else 0.0
+
+
+@dataclass
+class SewingStage:
+    """Where a sewing stood after one of its stages (:func:`sew`), to go on from: ``stage``
+    "sewn" (the first stage's rounds), "closed" (the closing) or "settling" (``rounds`` of the
+    settling done), the node positions [m] then (the panels' nodes for the first two, the joined
+    garment's for the last), the relaxation's step ``dt`` [s], the logs so far (``relaxation``:
+    the first two stages; ``settling``), the elements beyond ``settings.overstretched`` before each
+    settling round and their total length beyond their limits [m] (``excess``), and the seam gaps
+    [m] at the join."""
+
+    stage: str
+    points: np.ndarray
+    dt: float
+    relaxation: RelaxResult
+    settling: RelaxResult = field(default_factory=RelaxResult)
+    overstretched: list[int] = field(default_factory=list)
+    rounds: int = 0
+    seam_gaps: np.ndarray | None = None
+    excess: list[float] = field(default_factory=list)
+
+
+def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings = SewingSettings(), *,
+        device: str | None = None, progress: bool = False, resume: SewingStage | None = None,
+        on_stage: Callable[[SewingStage], None] | None = None) -> Sewn:
+    """Place ``garment`` around ``body``, sew it closed and return the sewn garment.
+
+    Three relaxations, all with the paper's explicit steps:
+
+    1. the panels pulled together by sewing springs (plastic limit off, so that seams can
+       close before the cloth has slid into place; cloth-cloth collision off, see the module
+       docstring), for ``settings.max_iterations``, in up to ``settings.rounds`` rounds while
+       a pair is more than ``settings.open_gap`` apart;
+    2. closing: each sewing spring also gets a plastic limit of ``settings.closed_gap``, which
+       pulls the last millimetres shut as a constraint, body collision on;
+    3. the joined garment (paired nodes merged), its crossings undone, with its own plastic
+       limit and cloth-cloth collision on (contacts sliding freely, ``settings.exchange``),
+       so that the dynamics start from a net within its limits; for more rounds while it pulls
+       back what the first stage overstretched (``settings.settling_rounds``).
+
+    ``on_stage(stage)`` is called after the first stage, the closing and each settling round
+    (:class:`SewingStage`), and a sewing given one as ``resume`` goes on after it. Each stage
+    and round starts from the positions the last one left, at rest, so a resumed sewing goes on
+    as it would have, but for the memory of the settling's collision searches and crossing guard.
+    """
+    net, node_map = garment.sewn()
+    pairs = sewing_pairs(node_map)
+    stage = resume.stage if resume else None
+    result = resume.relaxation.copy() if resume else RelaxResult()
+    if stage is None:
+        model = _panels_model(garment, fabric, dress(garment, body, device=device or "cpu"), body, pairs, np.inf,
+                              settings, device)
+        dt = SolverExplicit.relaxation_step(model)
+        state = model.state()
+        sewing = StaticRelaxation(model, collision=presets.SEWING, max_speed=settings.sewing_speed,
+                                  momentum=settings.momentum)
+        iterations = settings.max_iterations
+        for round_ in range(settings.rounds):
+            if round_ and (result.converged or _pair_gaps(state.positions(), pairs).max(initial=0.0) <= settings.open_gap):
+                break
+            with relax_progress("sewing" if round_ == 0 else "sewing on", iterations, progress) as on_log:
+                more = sewing.relax(state, dt, max_iterations=iterations, min_iterations=min(400, iterations),
+                                    on_log=on_log)
+            result.extend(more)
+        points = _finite(state.positions())
+        stage = _reached(on_stage, SewingStage("sewn", points, dt, result))
+    else:
+        points, dt = resume.points, resume.dt
+    if stage == "sewn" and len(pairs):
+        closing = _panels_model(garment, fabric, points, body, pairs,
+                                settings.closed_gap / settings.seam_rest_length - 1.0, settings, device)
+        state = closing.state()
+        steps = settings.stage_iterations
+        with relax_progress("closing seams", steps, progress) as on_log:
+            # the same masses and stiffnesses as the sewing model (only the seams' limit is new): same dt
+            closed = StaticRelaxation(closing, collision=presets.SEWING, max_speed=settings.settling_speed).relax(
+                state, dt, max_iterations=steps, min_iterations=min(100, steps), on_log=on_log)
+        result.iterations += closed.iterations
+        points = _finite(state.positions())
+        stage = _reached(on_stage, SewingStage("closed", points, dt, result))
+    if stage == "settling":
+        seam_gaps, merged = resume.seam_gaps, points
+    else:
+        pair_gap = _pair_gaps(points, garment.seam_pairs)
+        seam_gaps = np.zeros(len(garment.pattern.seams))
+        np.maximum.at(seam_gaps, garment.seam_of_pair, pair_gap)
+        merged = np.zeros((net.node_count, 3))
+        np.add.at(merged, node_map, points)
+        merged /= np.bincount(node_map, minlength=net.node_count)[:, None]
+        merged, _ = untangle(merged, net.triangles, device=device)
+
+    gamma, kappa = settings.exchange
+    joined = garment_model(net, fabric.with_(friction=0.0, momentum_propagation=gamma, cloth_friction=kappa), merged,
+                           body, gravity=False, device=device, sewn=False)
+    state = joined.state()
+    settle = settings.stage_iterations
+    settling = StaticRelaxation(joined, collision=presets.SETTLING, max_speed=settings.settling_speed)
+    settling_dt = SolverExplicit.relaxation_step(joined)
+    resumed = stage == "settling"
+    tail = resume.settling.copy() if resumed else RelaxResult()
+    overstretched = list(resume.overstretched) if resumed else []
+    excess = list(resume.excess) if resumed else []
+    for round_ in range(resume.rounds if resumed else 0, settings.settling_rounds):
+        count, total = _overstretched(joined, state.positions(), settings.overstretched)
+        overstretched.append(count)
+        excess.append(total)
+        if round_ and (count == 0 or (len(excess) > 1 and total > (1.0 - settings.settling_progress) * excess[-2])):
+            break
+        with relax_progress("settling seams" if round_ == 0 else "settling on", settle, progress) as on_log:
+            more = settling.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),
+                                  on_log=on_log)
+        tail.extend(more)
+        _reached(on_stage, SewingStage("settling", _finite(state.positions()), dt, result, tail, list(overstretched),
+                                       round_ + 1, seam_gaps, list(excess)))
+    points, _ = untangle(_finite(state.positions()), net.triangles, device=device)
+    return Sewn(garment, net, node_map, points, seam_gaps, result, tail, dt)
+
+
+def _reached(on_stage: Callable[[SewingStage], None] | None, stage: SewingStage) -> str:
+    """Report ``stage`` to ``on_stage``, its logs as they are now; its name."""
+    if on_stage is not None:
+        on_stage(replace(stage, relaxation=stage.relaxation.copy(), settling=stage.settling.copy()))
+    return stage.stage
+
+
+def _panels_model(garment: Garment, fabric: Fabric, points: np.ndarray, body: Body, pairs: np.ndarray,
+                  seam_strain_limit: float, settings: SewingSettings, device: str | None) -> Model:
+    """The unsewn panels at ``points`` [m] without gravity, skin friction or plastic limit,
+    tied by sewing springs between node ``pairs`` with plastic limit ``seam_strain_limit``."""
+    builder = ModelBuilder(gravity=(0.0, 0.0, 0.0))
+    builder.add_cloth(garment.net, fabric.with_(friction=0.0, strain_limit=float("inf")), points, name="panels")
+    if len(pairs):
+        stiffness = settings.seam_stiffness * float(np.median(builder.element_stiffness))
+        builder.add_springs(pairs, stiffness=stiffness, rest_length=settings.seam_rest_length,
+                            strain_limit=seam_strain_limit)
+    for collider in body.colliders:
+        builder.add_collider(collider)
+    return builder.finalize(device)
+
+
+def _overstretched(model: Model, points: np.ndarray, beyond_rest: float) -> tuple[int, float]:
+    """How many of ``model``'s elements with a plastic limit ``points`` [m] stretch beyond
+    ``beyond_rest`` times their rest length, and their total length beyond their limits [m]."""
+    limited = model.limited_elements
+    nodes = model.element_nodes.numpy()[limited]
+    length = np.linalg.norm(points[nodes[:, 1]] - points[nodes[:, 0]], axis=1)
+    beyond = length - model.element_max_length.numpy()[limited]
+    return (int((length > beyond_rest * model.element_rest_length.numpy()[limited]).sum()),
+            float(np.maximum(beyond, 0.0).sum()))
+
+
+def _pair_gaps(points: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Distance [m] between the two nodes of each of ``pairs`` (p, 2)."""
+    return np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
+
+
+def _finite(points: np.ndarray) -> np.ndarray:
+    if not np.all(np.isfinite(points)):
+        raise SimulationUnstable("sewing blew up (non-finite positions); try a coarser --spacing")
+    return points
+
+
+def sewing_pairs(node_map: np.ndarray) -> np.ndarray:
+    """Every pair of garment nodes that sew into one node (where three or four panels meet, each
+    corner is tied to each other one, so that none of them sees the others as cloth to collide
+    with), shape (p, 2)."""
+    order = np.argsort(node_map, kind="stable")
+    groups = np.split(order, np.flatnonzero(np.diff(node_map[order])) + 1)
+    pairs = [(a, b) for g in groups if len(g) > 1 for i, a in enumerate(g) for b in g[i + 1:]]
+    return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
