@@ -7,11 +7,19 @@ import numpy as np
 import pytest
 
 from party import device, launch
+from party.solvers.registry import SOLVERS
 
 if os.environ.get("PYTEST_XDIST_WORKER") and "PARTY_THREADS" not in os.environ:
     # pytest-xdist runs a test process per core: each keeps to its share of the cores, since
     # the implicit solver's workers spin at barriers (docs/design.md, Kernels and CPU threads)
     os.environ["PARTY_THREADS"] = str(max(1, launch.CORES // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
+
+
+@pytest.fixture(params=sorted(SOLVERS))
+def solver_name(request) -> str:
+    """Each registered solver by name, in turn: a physics test that takes ``solver_name`` holds
+    for every solver ``--solver`` offers, a new one included."""
+    return request.param
 
 
 @pytest.fixture(scope="session", autouse=True)

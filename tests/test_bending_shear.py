@@ -80,8 +80,8 @@ def test_hinge_forces_are_minus_the_energy_gradient(rng):
               device="cpu")
 
     def energy(p):
-        k = np.einsum("hk,hkc->hc", h["hinge_weights"], p[h["hinge_nodes"]])
-        return 0.5 * np.sum(h["hinge_stiffness"] * np.sum(k * k, axis=1))
+        k = np.einsum("hk,hkc->hc", h.hinge_weights, p[h.hinge_nodes])
+        return 0.5 * np.sum(h.hinge_stiffness * np.sum(k * k, axis=1))
 
     gradient = np.zeros_like(points)
     step = 1e-6
@@ -104,7 +104,7 @@ def test_shear_diagonals_give_the_fabrics_shear_stiffness():
     gamma = 0.01
     b.add_cloth(net, fabric, np.c_[net.uv[:, 0] + gamma * net.uv[:, 1], net.uv[:, 1], np.zeros(net.node_count)])
     model = b.finalize("cpu")
-    energy = total_energy(model, model.host["points"])
+    energy = total_energy(model, model.host.points)
     assert energy == pytest.approx(0.5 * fabric.shear * gamma**2 * 0.02, rel=0.02)
 
 

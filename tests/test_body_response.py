@@ -8,12 +8,10 @@ from party.collision import CollisionSettings
 from party.errors import InvalidInput
 from party.fabric import wool_flannel
 from party.model import ModelBuilder
-from party.solvers import SolverExplicit, SolverImplicit
+from party.solvers.registry import solver_class
 from conftest import simulate
 
 MU, SIGMA, EPS, DT = 0.6, 0.03, 3.0e-3, 1.0e-4
-SOLVERS = {"explicit": SolverExplicit, "implicit": SolverImplicit}
-both_solvers = pytest.mark.parametrize("solver", sorted(SOLVERS))
 
 
 def paper_response(v, n, mu, sigma, v_body):
@@ -37,53 +35,49 @@ def node_over_floor(velocity, floor_velocity=(0.0, 0.0, 0.0), height=0.005, solv
     slab = floor(0.0, size=2.0)
     b.add_collider(type(slab)(slab.name, slab.vertices, slab.faces, np.asarray(floor_velocity, float)))
     model = b.finalize("cpu")
-    integrator = SOLVERS[solver](model, collision=collision)
+    integrator = solver_class(solver)(model, collision=collision)
     state, out = model.state(velocity=velocity), model.state()
     integrator.step(state, out, model.control(), dt)
     return out
 
 
-@both_solvers
 @pytest.mark.parametrize("velocity", [
     (1.0, 0.5, -30.0),   # inside the friction cone: sticks
     (25.0, 0.0, -30.0),  # outside: slides, |v_t| reduced by mu |v_n|
     (0.0, 0.0, -30.0),   # head-on
 ])
-def test_static_floor_response_is_eqs_8_to_12(velocity, solver):
-    out = node_over_floor(velocity, solver=solver)
+def test_static_floor_response_is_eqs_8_to_12(velocity, solver_name):
+    out = node_over_floor(velocity, solver=solver_name)
     expected = paper_response(np.array(velocity), np.array([0, 0, 1.0]), MU, SIGMA, np.zeros(3))
     assert np.allclose(out.velocities()[0], expected, atol=1e-4)
     assert out.positions()[0, 2] >= EPS - 1e-6
 
 
-@both_solvers
 @pytest.mark.parametrize("arrive", [False, True])
-def test_a_node_stopped_by_the_body_bounces_from_where_its_step_reached_the_shell(arrive, solver):
+def test_a_node_stopped_by_the_body_bounces_from_where_its_step_reached_the_shell(arrive, solver_name):
     """A node 5 mm over the floor at 30 m/s down, a step of 1e-4 s taking it 3 mm, into the
     shell eps = 3 mm thick: as printed the response leaves it where it started and it ends
     its step at 5 mm plus its bounce, sigma 30 m/s dt; with ``arrive`` (the implicit solver's
     large steps) it is first moved to eps, where its step reached the shell, and ends at eps
     plus the bounce. Its velocity is eqs. (8)-(12)'s either way."""
     velocity = (1.0, 0.5, -30.0)
-    out = node_over_floor(velocity, solver=solver, collision=CollisionSettings(cloth=False, arrive=arrive))
+    out = node_over_floor(velocity, solver=solver_name, collision=CollisionSettings(cloth=False, arrive=arrive))
     bounce = SIGMA * 30.0 * DT
     assert out.positions()[0, 2] == pytest.approx((EPS if arrive else 0.005) + bounce, abs=1e-6)
     expected = paper_response(np.array(velocity), np.array([0, 0, 1.0]), MU, SIGMA, np.zeros(3))
     assert np.allclose(out.velocities()[0], expected, atol=1e-4)
 
 
-@both_solvers
-def test_inside_and_outside_cone_differ_as_the_paper_says(solver):
-    stick = node_over_floor((10.0, 0.0, -30.0), solver=solver).velocities()[0]
-    slide = node_over_floor((20.0, 0.0, -30.0), solver=solver).velocities()[0]
+def test_inside_and_outside_cone_differ_as_the_paper_says(solver_name):
+    stick = node_over_floor((10.0, 0.0, -30.0), solver=solver_name).velocities()[0]
+    slide = node_over_floor((20.0, 0.0, -30.0), solver=solver_name).velocities()[0]
     assert stick[0] == pytest.approx(0.0, abs=1e-5)
     assert slide[0] == pytest.approx(20.0 - MU * 30.0, rel=1e-4)
 
 
-@both_solvers
-def test_moving_body_velocity_is_added_back(solver):
+def test_moving_body_velocity_is_added_back(solver_name):
     v_floor = np.array([2.0, -1.0, 0.5])
-    out = node_over_floor((15.0, 3.0, -30.0), floor_velocity=v_floor, solver=solver)
+    out = node_over_floor((15.0, 3.0, -30.0), floor_velocity=v_floor, solver=solver_name)
     expected = paper_response(np.array([15.0, 3.0, -30.0]), np.array([0, 0, 1.0]), MU, SIGMA, v_floor)
     assert np.allclose(out.velocities()[0], expected, atol=1e-4)
 
@@ -97,15 +91,14 @@ def test_large_step_friction_cone_is_the_papers():
         assert out.positions()[0, 2] >= EPS - 1e-6
 
 
-@both_solvers
-def test_fast_node_does_not_tunnel_through_thin_plate(solver):
+def test_fast_node_does_not_tunnel_through_thin_plate(solver_name):
     """A 1 mm plate; the node moves 5 mm per step (50 m/s), more than eps per step and more
     than the plate is thick."""
     b = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     b.add_node((0.0, 0.0, 0.05), 1e-4, fabric=wool_flannel())
     b.add_collider(box((0.5, 0.5, 0.001), center=(0, 0, 0)))
     model = b.finalize("cpu")
-    integrator = SOLVERS[solver](model, collision=CollisionSettings(cloth=False))
+    integrator = solver_class(solver_name)(model, collision=CollisionSettings(cloth=False))
     state, out = model.state(velocity=(0.3, 0.0, -50.0)), model.state()
     for _ in range(40):
         integrator.step(state, out, model.control(), DT)
@@ -114,13 +107,14 @@ def test_fast_node_does_not_tunnel_through_thin_plate(solver):
     assert z >= 0.0005 + EPS - 1e-6
 
 
-@pytest.mark.parametrize("solver,dt,steps", [("explicit", DT, 3000), ("implicit", 1.0 / 300.0, 90)])
-def test_resting_node_stays_eps_above_under_gravity(solver, dt, steps):
+def test_resting_node_stays_eps_above_under_gravity(solver_name):
+    dt = solver_class(solver_name).default_dt
+    steps = round(0.3 / dt)
     b = ModelBuilder()
     b.add_node((0.0, 0.0, 0.01), 1e-4, fabric=wool_flannel())
     b.add_collider(floor(0.0))
     model = b.finalize("cpu")
-    state = simulate(model, SOLVERS[solver](model, collision=CollisionSettings(cloth=False)), steps, dt)
+    state = simulate(model, solver_class(solver_name)(model, collision=CollisionSettings(cloth=False)), steps, dt)
     # within half of one step's free fall g dt^2 (0.1 mm at 1/300 s, 0.05 um at 1e-4 s) or 10 um
     assert state.positions()[0, 2] == pytest.approx(EPS, abs=max(1e-5, 0.5 * 9.81 * dt * dt))
     assert abs(state.velocities()[0, 2]) < 0.05

@@ -43,7 +43,7 @@ def one_step(resolve: bool):
     p = out.positions()
     h = model.host
     sheet = np.all(model.elements < sheet_nodes, axis=1) & model.limited_elements
-    stretch = max_elongation(p, model.elements[sheet], h["element_params"][sheet, 0], np.ones(sheet.sum(), bool))
+    stretch = max_elongation(p, model.elements[sheet], h.element_rest_length[sheet], np.ones(sheet.sum(), bool))
     over = np.all(np.abs(p[:sheet_nodes, :2]) < PATCH / 2, axis=1)
     return stretch, p[:sheet_nodes, 2], p[:sheet_nodes][over, 2].min()
 

@@ -27,13 +27,12 @@ class Stop(Exception):
     pass
 
 
-@pytest.mark.parametrize("solver", ["explicit", "implicit"])
-def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_path, solver):
+def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_path, solver_name):
     """Stopped after its second save while draping, the drape leaves only its checkpoint; resumed,
     it does not sew again, goes on from the saved step to rest, with nothing through the body or
     itself, and counts the sewing it did before."""
     out = tmp_path / "out"
-    settings = DrapeSettings(spacing=SPACING, solver=solver, images=False, progress=False, checkpoint_seconds=0.0)
+    settings = DrapeSettings(spacing=SPACING, solver=solver_name, images=False, progress=False, checkpoint_seconds=0.0)
     saves = []
 
     def stop_after_two(stage, step):

@@ -168,8 +168,8 @@ def test_plastic_sweep_in_one_cpu_launch_is_the_sweep_colour_by_colour():
         limit.apply(state, dt)
         found.append(state.velocities())
     assert np.array_equal(found[0], found[1])
-    x = model.host["points"] + found[0] * dt
-    e = model.host["elements"]
+    x = model.host.points + found[0] * dt
+    e = model.host.elements
     length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
     limit = model.element_max_length.numpy()
     assert np.all(length <= limit * (1.0 + 2 * PLASTIC_TOLERANCE))
@@ -285,7 +285,7 @@ def test_over_relaxed_plastic_sweeps_converge_faster_to_the_same_bound():
         state = model.state()
         state.node_qd.assign(falling)
         sweeps[over_relaxation] = limit.apply(state, dt, over_relaxation)
-        x = model.host["points"] + state.velocities() * dt
+        x = model.host.points + state.velocities() * dt
         lengths[over_relaxation] = np.linalg.norm(np.diff(x, axis=0), axis=1)
     for found in lengths.values():
         assert found.max() <= l0 * (1 + strain_limit) * (1 + 2 * PLASTIC_TOLERANCE)

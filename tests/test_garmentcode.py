@@ -196,7 +196,7 @@ def jumpsuit_sewn_stretch(fabric_name: str) -> np.ndarray:
     fabric = fabric_by_name(fabric_name)
     sewn = sew(garment, body, fabric, device="cpu")
     model = garment_model(sewn.net, fabric, sewn.points, body, sewn=False)
-    nodes, rest = model.elements[model.limited_elements], model.host["element_params"][model.limited_elements, 0]
+    nodes, rest = model.elements[model.limited_elements], model.host.element_rest_length[model.limited_elements]
     return np.linalg.norm(sewn.points[nodes[:, 1]] - sewn.points[nodes[:, 0]], axis=1) / rest
 
 

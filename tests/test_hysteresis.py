@@ -55,8 +55,8 @@ def test_implicit_substeps_keep_the_sliders_bending_within_the_ratio(spacing):
         steps[two_hb] = SolverImplicit(model, collision=None).substeps(dt)
     h = model.host
     stuck = model.bending_matrix(friction=True).diagonal()
-    sliders = np.unique(h["hinge_nodes"][h["hinge_friction"] > 0.0])
-    ratio = float(np.max(stuck[sliders] / h["mass"][sliders])) * dt**2
+    sliders = np.unique(h.hinge_nodes[h.hinge_friction > 0.0])
+    ratio = float(np.max(stuck[sliders] / h.mass[sliders])) * dt**2
     count = steps[1e-4]
     bend = model.bending_matrix(friction=False)
     stiffness = NodeCoupling.of(model, bend).largest_rate() * dt**2 / (STIFFNESS_PER_SWEEP * MAX_SWEEPS)

@@ -68,7 +68,7 @@ def test_a_nodes_neighbour_row_holds_each_element_once_and_its_bending_row_once(
     owner = np.repeat(np.arange(n), np.diff(rows.offsets))
     spring = rows.params[:, 1] != 0.0
     h = model.host
-    e, params = h["elements"], h["element_params"][:, :3]
+    e, params = h.elements, np.stack([h.element_rest_length, h.element_stiffness, h.element_damping], axis=1)
     expected = sorted(map(tuple, np.r_[np.c_[e[:, 0], e[:, 1], params], np.c_[e[:, 1], e[:, 0], params]].round(9)))
     found = sorted(map(tuple, np.c_[owner[spring], rows.nodes[spring], rows.params[spring, :3]].round(9)))
     assert len(e) == len(net.elements) + 1 and found == expected
@@ -97,13 +97,13 @@ def test_damped_free_motion_loses_energy_every_step(rng, name, iterations, slack
     bump = np.sin(np.pi * net.uv[:, 0] / 0.2) * np.sin(np.pi * net.uv[:, 1] / 0.2)
     state.node_qd.assign((np.c_[0.2 * bump, 0.1 * bump, 0.5 * bump] + 0.01 * rng.normal(size=(model.node_count, 3)))
                          .astype(np.float32))
-    mass = model.host["mass"]
+    mass = model.host.mass
     h = model.host
 
     def energy(s):
         p, v = s.positions(), s.velocities()
-        k = np.einsum("hk,hkc->hc", h["hinge_weights"], p[h["hinge_nodes"]])
-        bending = 0.5 * np.sum(h["hinge_stiffness"] * np.sum(k * k, axis=1))
+        k = np.einsum("hk,hkc->hc", h.hinge_weights, p[h.hinge_nodes])
+        bending = 0.5 * np.sum(h.hinge_stiffness * np.sum(k * k, axis=1))
         return total_energy(model, p) + bending + 0.5 * np.sum(mass * np.sum(v * v, axis=1))
 
     energies = [energy(state)]
@@ -132,7 +132,7 @@ def test_large_steps_stay_stable_for_every_fabric(name):
     solver = SolverImplicit(model)
     probe = ColliderProbe([ball], "cpu")
     limited = model.limited_elements
-    rest = model.host["element_params"][:, 0]
+    rest = model.host.element_rest_length
     checks = []
 
     def check(state, step):
@@ -256,7 +256,7 @@ def crossing_strips(guard: bool, solver_class=SolverImplicit, dt: float = 1.0 / 
         if k % every == 0:
             points = state.positions()
             counts.append(cloth_crossings(points, model.triangles))
-            stretch.append(max_elongation(points, model.host["elements"], model.host["element_params"][:, 0], limited))
+            stretch.append(max_elongation(points, model.host.elements, model.host.element_rest_length, limited))
     solver.crossing_stretch = np.array(stretch)
     solver.final_points = state.positions()
     return np.array(counts), solver
@@ -287,8 +287,8 @@ def test_crossing_guard_sends_neighbours_back_where_one_alone_would_overstretch(
         b.add_element(i, k, stiffness=10.0, damping=0.0, rest_length=0.01, strain_limit=0.1)
     model = b.finalize("cpu")
     guard = CrossingGuard(model, every=2)
-    guard.anchor.assign(model.host["points"].astype(np.float32))
-    x = wp.array((model.host["points"] + [0.0, shift, 0.0]).astype(np.float32), dtype=wp.vec3)
+    guard.anchor.assign(model.host.points.astype(np.float32))
+    x = wp.array((model.host.points + [0.0, shift, 0.0]).astype(np.float32), dtype=wp.vec3)
     guard.revert.assign(np.array([1, 0, 0], np.int32))
     guard._spread(x)
     assert guard.revert.numpy().tolist() == reverted
@@ -374,7 +374,7 @@ def test_crossing_guard_keeps_its_lists_while_the_cloth_moves_as_a_whole():
         b.add_cloth(net, wool_flannel(), np.c_[net.uv, np.full(net.node_count, z)])
     model = b.finalize("cpu")
     guard = CrossingGuard(model)
-    start = model.host["points"].astype(np.float32)
+    start = model.host.points.astype(np.float32)
     x = wp.array(start, dtype=wp.vec3, device="cpu")
     v = wp.zeros(model.node_count, dtype=wp.vec3, device="cpu")
     guard.prime(x)

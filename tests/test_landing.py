@@ -118,8 +118,8 @@ def warp_weft_stretch(grid: int, dt: float, seconds: float, landing: bool) -> np
     for _ in range(int(round(seconds / dt))):
         solver.step(state, scratch, control, dt)
         state, scratch = scratch, state
-    elements = model.host["elements"]
-    rest = model.host["element_params"][:, 0]
+    elements = model.host.elements
+    rest = model.host.element_rest_length
     warp_weft = np.isclose(rest, rest.min())
     points = state.positions()
     length = np.linalg.norm(points[elements[:, 1]] - points[elements[:, 0]], axis=1)

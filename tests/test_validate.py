@@ -14,7 +14,6 @@ from party.validate import (CaseResult, Check, cantilever, catenary, cusick, fri
                             run_validation)
 from party.validate.references import chord_angle, elastic_catenary, heavy_elastica
 
-SOLVERS = ("explicit", "implicit")
 COTTON = fabric_by_name("cotton")
 
 
@@ -43,9 +42,8 @@ def test_stiff_elastic_catenary_is_the_cosh_catenary():
     assert np.allclose(curve[:, 1], a * (np.cosh((x - 0.4) / a) - np.cosh(0.4 / a)), atol=1e-7)
 
 
-@pytest.mark.parametrize("solver", SOLVERS)
-def test_oscillation_periods_within_1_percent(solver):
-    assert_passed(oscillation.run_case(COTTON, solver, quick=True))
+def test_oscillation_periods_within_1_percent(solver_name):
+    assert_passed(oscillation.run_case(COTTON, solver_name, quick=True))
 
 
 @pytest.mark.parametrize("spacing", [0.02, 0.01])
@@ -57,24 +55,20 @@ def test_implicit_strip_period_within_a_fifth_of_case_1s_tolerance(spacing):
     assert abs(period / reference - 1.0) < 0.002
 
 
-@pytest.mark.parametrize("solver", SOLVERS)
-def test_catenary_within_1_percent_of_span(solver):
-    assert_passed(catenary.run_case(COTTON, solver, quick=True))
+def test_catenary_within_1_percent_of_span(solver_name):
+    assert_passed(catenary.run_case(COTTON, solver_name, quick=True))
 
 
-@pytest.mark.parametrize("solver", SOLVERS)
-def test_friction_cone_decides_and_slides_at_g_sin_minus_mu_cos(solver):
-    assert_passed(friction.run_case(COTTON, solver, quick=True))
+def test_friction_cone_decides_and_slides_at_g_sin_minus_mu_cos(solver_name):
+    assert_passed(friction.run_case(COTTON, solver_name, quick=True))
 
 
-@pytest.mark.parametrize("solver", SOLVERS)
-def test_restitution_within_1_percent(solver):
-    assert_passed(restitution.run_case(COTTON, solver, quick=True))
+def test_restitution_within_1_percent(solver_name):
+    assert_passed(restitution.run_case(COTTON, solver_name, quick=True))
 
 
-@pytest.mark.parametrize("solver", SOLVERS)
-def test_cantilever_bending_length_within_3_percent(tmp_path, solver):
-    result = cantilever.run_case(COTTON, solver, quick=True, out=tmp_path)
+def test_cantilever_bending_length_within_3_percent(tmp_path, solver_name):
+    result = cantilever.run_case(COTTON, solver_name, quick=True, out=tmp_path)
     assert_passed(result)
     assert (tmp_path / "cantilever.png").stat().st_size > 10_000
 
@@ -267,16 +261,15 @@ def test_both_solvers_drape_a_measured_cusick_specimen_alike(measured_drapes):
 
 
 @MEASURED
-@pytest.mark.parametrize("solver", SOLVERS)
-def test_measured_fabrics_drape_within_case_7s_tolerance(measured_drapes, solver):
+def test_measured_fabrics_drape_within_case_7s_tolerance(measured_drapes, solver_name):
     """Case 7 as ``party validate`` runs it: fabrics B, C and F (measured DC 49.8, 50.7 and
     28.3 %, 5, 5 and 7 folds), the mean of three specimens within 8 DC points and 1 fold of the
     measurement, with either solver. Single specimens differ by up to 2 folds (the implicit
-    solver's B: 7, 5 and 6), so the first alone does not decide the case. With the hysteresis
+    solver_name's B: 7, 5 and 6), so the first alone does not decide the case. With the hysteresis
     element's stuck spring at 5 times the bending (now 20) B and C had 6 folds, F 8.3 to 8.7,
     and the implicit solver's B, at 1/300 s, 7."""
     for name in ("measured_B", "measured_C", "measured_F"):
-        drapes, dc, nodes = measured_drapes(name, solver)
+        drapes, dc, nodes = measured_drapes(name, solver_name)
         summary = cusick.summarize(drapes)
         assert abs(summary["dc_percent"] - dc) <= cusick.DC_TOLERANCE, name
         assert abs(summary["nodes"] - nodes) <= cusick.NODE_TOLERANCE, name

@@ -48,105 +48,70 @@ def covered(x: wp.vec3, v: wp.vec3, dt: float, ref: wp.vec3, ref_step: wp.vec3, 
     return (continuing != 0 or complete) and step_within(x, x + v * dt, ref, ref_step, margin)
 
 
-@wp.kernel
-def gather_body_faces(
-    first: int,
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    inv_mass: wp.array(dtype=float),
-    thickness: wp.array(dtype=float),
-    lists: IntervalLists,
-    dt: float,
-    margin: float,
-    everything: int,
-    continuing: int,
-    ref: wp.array(dtype=wp.vec3),
-    ref_step: wp.array(dtype=wp.vec3),
-    searched_again: wp.array(dtype=int),
-    faces_out: wp.array(dtype=int, ndim=2),
-    face_count: wp.array(dtype=int),
-    overflow: wp.array(dtype=int),
-):
-    """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
-    lets the answer serve the next steps, walked on the axis with n = min(n_x, n_y, n_z) list
-    entries and box-checked in 3-D. The triangles found are kept for the narrow phase, and r
-    in ``ref`` and the step in ``ref_step``. With ``everything`` 0 only nodes whose step left the
-    region searched (:func:`covered`) search again (the body must be static then, or
-    ``continuing``); with ``continuing`` 1 they are marked in ``searched_again``."""
-    i = first + wp.tid()
-    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing,
-                                   face_count[i] < MAX_FACES):
-        return
-    if continuing != 0:
-        searched_again[i] = 1
-    ref[i] = x[i]
-    ref_step[i] = v[i] * dt
-    face_count[i] = 0
-    if inv_mass[i] == 0.0:
-        return
-    x0 = x[i]
-    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
-    sel = query_axis(lists, lo, hi)
-    axis = sel[0]
-    base = axis * (lists.max_cells + 1)
-    count = int(0)
-    for c in range(sel[1], sel[2] + 1):
-        for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
-            f = lists.ids[j]
-            if not found_once(lists, f, lo, hi, axis, sel[1], c):
-                continue
-            if count < MAX_FACES:
-                faces_out[i, count] = f
-                count += 1
-            else:
-                wp.atomic_add(overflow, 0, 1)
-    face_count[i] = count
+@wp.func
+def keep_face(i: int, f: int, count: int, faces_out: wp.array(dtype=int, ndim=2), overflow: wp.array(dtype=int)) -> int:
+    """Keep body face ``f`` as node ``i``'s ``count``-th candidate where there is room (else
+    count it in ``overflow``); the count after."""
+    if count < MAX_FACES:
+        faces_out[i, count] = f
+        return count + 1
+    wp.atomic_add(overflow, 0, 1)
+    return count
 
 
-@wp.kernel
-def gather_body_faces_bvh(
-    first: int,
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    inv_mass: wp.array(dtype=float),
-    thickness: wp.array(dtype=float),
-    bvh: wp.uint64,
-    dt: float,
-    margin: float,
-    everything: int,
-    continuing: int,
-    ref: wp.array(dtype=wp.vec3),
-    ref_step: wp.array(dtype=wp.vec3),
-    searched_again: wp.array(dtype=int),
-    faces_out: wp.array(dtype=int, ndim=2),
-    face_count: wp.array(dtype=int),
-    overflow: wp.array(dtype=int),
-):
-    """:func:`gather_body_faces` with a BVH (:mod:`party.collision.bvh`) in place of the
-    interval lists: the same box, the same triangles."""
-    i = first + wp.tid()
-    if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing,
-                                   face_count[i] < MAX_FACES):
-        return
-    if continuing != 0:
-        searched_again[i] = 1
-    ref[i] = x[i]
-    ref_step[i] = v[i] * dt
-    face_count[i] = 0
-    if inv_mass[i] == 0.0:
-        return
-    x0 = x[i]
-    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
-    query = wp.bvh_query_aabb(bvh, lo, hi)
-    f = int(0)
-    count = int(0)
-    while wp.bvh_query_next(query, f):
-        if count < MAX_FACES:
-            faces_out[i, count] = f
-            count += 1
+def _gather_body_faces(bvh: bool):
+    """The body-face search over the interval lists (``bvh`` False) or a BVH over the same boxes
+    (:mod:`party.collision.bvh`): one kernel, whose walk over the box's candidates is the only
+    part that differs."""
+    structure_type = wp.uint64 if bvh else IntervalLists
+
+    def gather_body_faces(first: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+                          inv_mass: wp.array(dtype=float), thickness: wp.array(dtype=float), structure: structure_type,
+                          dt: float, margin: float, everything: int, continuing: int, ref: wp.array(dtype=wp.vec3),
+                          ref_step: wp.array(dtype=wp.vec3), searched_again: wp.array(dtype=int),
+                          faces_out: wp.array(dtype=int, ndim=2), face_count: wp.array(dtype=int),
+                          overflow: wp.array(dtype=int)):
+        """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
+        lets the answer serve the next steps, walked on the interval lists' axis with the
+        fewest entries and box-checked in 3-D (or queried in a BVH of the same boxes: the same
+        triangles). The triangles found are kept for the narrow phase, and r in ``ref`` and the
+        step in ``ref_step``. With ``everything`` 0 only nodes whose step left the region
+        searched (:func:`covered`) search again (the body must be static then, or
+        ``continuing``); with ``continuing`` 1 they are marked in ``searched_again``."""
+        i = first + wp.tid()
+        if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing,
+                                       face_count[i] < MAX_FACES):
+            return
+        if continuing != 0:
+            searched_again[i] = 1
+        ref[i] = x[i]
+        ref_step[i] = v[i] * dt
+        face_count[i] = 0
+        if inv_mass[i] == 0.0:
+            return
+        lo, hi = step_box(x[i], v[i] * dt, thickness[i] + margin)
+        count = int(0)
+        if wp.static(bvh):
+            query = wp.bvh_query_aabb(structure, lo, hi)
+            f = int(0)
+            while wp.bvh_query_next(query, f):
+                count = keep_face(i, f, count, faces_out, overflow)
         else:
-            wp.atomic_add(overflow, 0, 1)
-    face_count[i] = count
+            sel = query_axis(structure, lo, hi)
+            axis = sel[0]
+            base = axis * (structure.max_cells + 1)
+            for c in range(sel[1], sel[2] + 1):
+                for j in range(structure.offsets[base + c], structure.offsets[base + c + 1]):
+                    f = structure.ids[j]
+                    if found_once(structure, f, lo, hi, axis, sel[1], c):
+                        count = keep_face(i, f, count, faces_out, overflow)
+        face_count[i] = count
+
+    return wp.kernel(gather_body_faces, name=f"gather_body_faces_{'bvh' if bvh else 'lists'}")
+
+
+gather_body_faces = _gather_body_faces(False)
+gather_body_faces_bvh = _gather_body_faces(True)
 
 
 @wp.kernel

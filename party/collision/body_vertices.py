@@ -69,7 +69,7 @@ def vertices_to_test(model: Model) -> np.ndarray:
     r is 1.6 mm, and the cloth stayed 2.2 to 2.5 mm off the vertices. Every vertex is tested
     where a body deforms (its vertices' velocities differ) or the net has no plastic limit to
     bound its triangles."""
-    colliders = model.host["colliders"]
+    colliders = model.host.colliders
     total = sum(len(c.vertices) for c in colliders)
     every = np.arange(total)
     rest = model.element_rest_length.numpy()

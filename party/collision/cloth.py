@@ -126,81 +126,55 @@ def moved_beyond(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_ref: 
         flags[1] = 1
 
 
-@wp.kernel
-def gather_cloth_triangles_bvh(
-    first: int,
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    thickness: wp.array(dtype=float),
-    tris: wp.array(dtype=int, ndim=2),
-    excluded_offsets: wp.array(dtype=int),
-    excluded: wp.array(dtype=int),
-    bvh: wp.uint64,
-    dt: float,
-    margin: float,
-    out: wp.array(dtype=int, ndim=2),
-    out_count: wp.array(dtype=int),
-    out_distance: wp.array(dtype=float, ndim=2),
-    step_ref: wp.array(dtype=wp.vec3),
-    overflow: wp.array(dtype=int),
-):
-    """:func:`gather_cloth_triangles` with a BVH (:mod:`party.collision.bvh`) in place of the
-    interval lists: the same box, the same triangles kept."""
-    i = first + wp.tid()
-    x0 = x[i]
-    step_ref[i] = v[i] * dt
-    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
-    reach = search_reach(thickness[i], margin, v[i], dt)
-    query = wp.bvh_query_aabb(bvh, lo, hi)
-    t = int(0)
-    count = int(0)
-    while wp.bvh_query_next(query, t):
-        count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count, out, out_distance,
-                                   overflow)
-    out_count[i] = count
+def _gather_cloth_triangles(bvh: bool):
+    """The cloth search over the interval lists (``bvh`` False) or a BVH over the same boxes
+    (:mod:`party.collision.bvh`): one kernel, whose walk over the box's candidates is the only
+    part that differs."""
+    structure_type = wp.uint64 if bvh else IntervalLists
+
+    def gather_cloth_triangles(first: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+                               thickness: wp.array(dtype=float), tris: wp.array(dtype=int, ndim=2),
+                               excluded_offsets: wp.array(dtype=int), excluded: wp.array(dtype=int),
+                               structure: structure_type, dt: float, margin: float, out: wp.array(dtype=int, ndim=2),
+                               out_count: wp.array(dtype=int), out_distance: wp.array(dtype=float, ndim=2),
+                               step_ref: wp.array(dtype=wp.vec3), overflow: wp.array(dtype=int)):
+        """The search of section 6.1 against the cloth's own triangles: the box spanned by r and
+        r + dr grown by eps and a margin, walked on the interval lists' axis with the fewest
+        entries (or queried in a BVH of the same boxes: the same triangles). Triangles holding
+        the node or one of its excluded nodes (section 6.3; see
+        :meth:`~party.collision.pipeline.CollisionPipeline._excluded_nodes`) are left out; the
+        nearest MAX_CANDIDATES others are kept for the following steps (the count of farther
+        ones dropped goes to ``overflow``), and the node's step in ``step_ref``
+        (:func:`moved_beyond`)."""
+        i = first + wp.tid()
+        x0 = x[i]
+        step_ref[i] = v[i] * dt
+        lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
+        reach = search_reach(thickness[i], margin, v[i], dt)
+        count = int(0)
+        if wp.static(bvh):
+            query = wp.bvh_query_aabb(structure, lo, hi)
+            t = int(0)
+            while wp.bvh_query_next(query, t):
+                count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count, out,
+                                       out_distance, overflow)
+        else:
+            sel = query_axis(structure, lo, hi)
+            axis = sel[0]
+            base = axis * (structure.max_cells + 1)
+            for c in range(sel[1], sel[2] + 1):
+                for j in range(structure.offsets[base + c], structure.offsets[base + c + 1]):
+                    t = structure.ids[j]
+                    if found_once(structure, t, lo, hi, axis, sel[1], c):
+                        count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count,
+                                               out, out_distance, overflow)
+        out_count[i] = count
+
+    return wp.kernel(gather_cloth_triangles, name=f"gather_cloth_triangles_{'bvh' if bvh else 'lists'}")
 
 
-@wp.kernel
-def gather_cloth_triangles(
-    first: int,
-    x: wp.array(dtype=wp.vec3),
-    v: wp.array(dtype=wp.vec3),
-    thickness: wp.array(dtype=float),
-    tris: wp.array(dtype=int, ndim=2),
-    excluded_offsets: wp.array(dtype=int),
-    excluded: wp.array(dtype=int),
-    lists: IntervalLists,
-    dt: float,
-    margin: float,
-    out: wp.array(dtype=int, ndim=2),
-    out_count: wp.array(dtype=int),
-    out_distance: wp.array(dtype=float, ndim=2),
-    step_ref: wp.array(dtype=wp.vec3),
-    overflow: wp.array(dtype=int),
-):
-    """The interval-list search of section 6.1 against the cloth's own triangles: the box
-    spanned by r and r + dr grown by eps and a margin, walked on the axis with the fewest
-    entries. Triangles holding the node or one of its excluded nodes (section 6.3; see
-    :meth:`~party.collision.pipeline.CollisionPipeline._excluded_nodes`) are left out; the
-    nearest MAX_CANDIDATES others are kept for the following steps (the count of farther ones
-    dropped goes to ``overflow``), and the node's step in ``step_ref`` (:func:`moved_beyond`)."""
-    i = first + wp.tid()
-    x0 = x[i]
-    step_ref[i] = v[i] * dt
-    lo, hi = step_box(x0, v[i] * dt, thickness[i] + margin)
-    reach = search_reach(thickness[i], margin, v[i], dt)
-    sel = query_axis(lists, lo, hi)
-    axis = sel[0]
-    base = axis * (lists.max_cells + 1)
-    count = int(0)
-    for c in range(sel[1], sel[2] + 1):
-        for j in range(lists.offsets[base + c], lists.offsets[base + c + 1]):
-            t = lists.ids[j]
-            if not found_once(lists, t, lo, hi, axis, sel[1], c):
-                continue
-            count = keep_candidate(i, t, x0, x, v, dt, reach, tris, excluded_offsets, excluded, count, out, out_distance,
-                                   overflow)
-    out_count[i] = count
+gather_cloth_triangles = _gather_cloth_triangles(False)
+gather_cloth_triangles_bvh = _gather_cloth_triangles(True)
 
 
 @wp.func

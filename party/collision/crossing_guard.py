@@ -309,7 +309,7 @@ class CrossingGuard:
         self.near = wp.zeros((self.edge_count, settings.near_room), dtype=int, device=dev)
         self.near_count = wp.zeros(self.edge_count, dtype=int, device=dev)
         self.listed_at = wp.zeros(model.node_count, dtype=wp.vec3, device=dev)
-        rest = model.host["element_params"][:, 0]
+        rest = model.host.element_rest_length
         self.reach = min(settings.near_reach, 0.5 * float(np.median(rest))) if len(rest) else settings.near_reach
         self._listed = False
         self._flag = wp.zeros(1, dtype=int, device=dev)

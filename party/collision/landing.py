@@ -84,7 +84,7 @@ def shortest_edge(model: Model) -> np.ndarray:
     node with neither (it is never cut for)."""
     h = model.host
     length = np.full(model.node_count, np.inf)
-    tri = h["triangles"].astype(np.int64).reshape(-1, 3)
+    tri = h.triangles.astype(np.int64).reshape(-1, 3)
     if len(tri):
         inverse = model.triangle_inv_rest.numpy().astype(np.float64)
         ok = np.linalg.det(inverse) != 0.0  # a degenerate triangle's inverse was left 0
@@ -94,7 +94,7 @@ def shortest_edge(model: Model) -> np.ndarray:
                                             axis=1), axis=2).min(axis=1)
         for corner in range(3):
             np.minimum.at(length, tri[:, corner], sides)
-    e, rest = h["elements"].astype(np.int64), h["element_params"][:, 0].astype(np.float64)
+    e, rest = h.elements.astype(np.int64), h.element_rest_length.astype(np.float64)
     alone = np.isinf(length)
     for end in range(2):
         bare = alone[e[:, end]] & (rest > 0.0)

@@ -189,7 +189,7 @@ class CollisionPipeline:
             # each node's shortest edge [m], for the landing substeps and the implicit solver's re-solve
             self.node_length = wp.array(shortest_edge(model).astype(np.float32), dtype=float, device=dev)
         if self.has_body:
-            colliders = model.host["colliders"]
+            colliders = model.host.colliders
             size = max(_triangle_size(c.vertices, c.faces) for c in colliders)
             if self.bvh:
                 self.body_tree = TriangleBvh(model.collider_faces)
@@ -206,9 +206,9 @@ class CollisionPipeline:
                   else np.zeros(0, dtype=int))
         self.has_body_vertices = len(tested) > 0
         if self.has_body_vertices:
-            normals = np.concatenate([c.vertex_normals() for c in model.host["colliders"]])
+            normals = np.concatenate([c.vertex_normals() for c in model.host.colliders])
             self.body_vertex_normals = wp.array(normals.astype(np.float32), dtype=wp.vec3, device=dev)
-            creases = np.concatenate([c.crease_normals() for c in model.host["colliders"]])
+            creases = np.concatenate([c.crease_normals() for c in model.host.colliders])
             self.body_crease_normals = wp.array(creases.astype(np.float32), dtype=wp.vec3, ndim=2, device=dev)
             self.tested_vertices = wp.array(tested.astype(np.int32), dtype=int, device=dev)
             self._vertex_lower = wp.zeros(len(tested), dtype=wp.vec3, device=dev)
@@ -221,7 +221,7 @@ class CollisionPipeline:
             self._triangle_ref = wp.zeros((t, 3), dtype=wp.vec3, device=dev)
             self._triangle_step_ref = wp.zeros((t, 3), dtype=wp.vec3, device=dev)
         if self.has_cloth:
-            size = _triangle_size(model.host["points"], model.triangles)
+            size = _triangle_size(model.host.points, model.triangles)
             if self.bvh:
                 self.cloth_tree = TriangleBvh(model.triangle_nodes)
             else:
@@ -254,7 +254,7 @@ class CollisionPipeline:
         self._overflow.zero_()  # the run's own searches report theirs
         if not own_layer:
             return widest
-        element = float(np.median(self.model.host["element_params"][:, 0]))
+        element = float(np.median(self.model.host.element_rest_length))
         return min(widest, CLOTH_MARGIN_PER_ELEMENT * element)
 
     def listed_per_node(self, x: wp.array, margin: float) -> float:

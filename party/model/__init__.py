@@ -2,7 +2,7 @@
 what changes each step; a :class:`Control` holds what the scene drives (wind, handles)."""
 
 from .builder import ClothRange, ModelBuilder
-from .model import Model
+from .model import HostArrays, Model
 from .state import Control, State
 
-__all__ = ["ClothRange", "Control", "Model", "ModelBuilder", "State"]
+__all__ = ["ClothRange", "Control", "HostArrays", "Model", "ModelBuilder", "State"]

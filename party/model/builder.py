@@ -15,7 +15,7 @@ from ..meshing.hinges import hinges
 from ..meshing.net import ClothNet, ElementKind
 from ..units import GRAVITY
 from .csr import csr_order
-from .model import Model
+from .model import HostArrays, Model
 from .nearby import nodes_within
 
 FOLD_REACH = 0.5 * np.pi
@@ -310,13 +310,13 @@ class ModelBuilder:
             collider_normals=arr(normals.astype(np.float32), wp.vec3),
             collider_velocity=velocity,
             gravity=wp.vec3(*self.gravity),
-            host={
-                "points": points, "mass": mass, "elements": elements, "element_params": params,
-                "triangles": triangles, "kinematic": kinematic, "hinge_nodes": hinge_nodes,
-                "hinge_weights": hinge_weights, "hinge_stiffness": hinge_stiffness, "hinge_friction": hinge_friction,
-                "membrane_area": membrane_area, "cloths": tuple(self.cloths),
-                "colliders": tuple(self._colliders),
-            },
+            host=HostArrays(
+                points=points, mass=mass, kinematic=kinematic, elements=elements,
+                element_rest_length=params[:, 0], element_stiffness=params[:, 1], element_damping=params[:, 2],
+                element_max_length=params[:, 3], triangles=triangles, hinge_nodes=hinge_nodes,
+                hinge_weights=hinge_weights, hinge_stiffness=hinge_stiffness, hinge_friction=hinge_friction,
+                membrane_area=membrane_area, cloths=tuple(self.cloths), colliders=tuple(self._colliders),
+            ),
         )
 
 

@@ -10,6 +10,46 @@ import warp as wp
 from .state import Control, State
 
 
+@dataclass(frozen=True)
+class HostArrays:
+    """The model's set-up data on the host (NumPy), for set-up work, checks and output.
+
+    Attributes:
+        points: Node positions at set-up [m], shape (n, 3).
+        mass: Lumped node masses [kg], shape (n,).
+        kinematic: Whether each node is kinematic (pinned or driven), bool shape (n,).
+        elements: The nodes (i, k) of each element, shape (e, 2).
+        element_rest_length: l0 [m] per element.
+        element_stiffness: Spring constant [N/m] per element.
+        element_damping: Damper coefficient [kg/s] per element.
+        element_max_length: (1 + L_sh) l0 [m] per element; infinite where it has no plastic
+            limit.
+        triangles: Cloth triangles' nodes, shape (t, 3).
+        hinge_nodes, hinge_weights: Each bending stencil's nodes and curvature weights.
+        hinge_stiffness, hinge_friction: Each stencil's bending and hysteresis stiffness [N*m^3].
+        membrane_area: Rest area [m^2] of each membrane triangle (0 for the others).
+        cloths: The cloths added, in order.
+        colliders: The colliders added, in order.
+    """
+
+    points: np.ndarray
+    mass: np.ndarray
+    kinematic: np.ndarray
+    elements: np.ndarray
+    element_rest_length: np.ndarray
+    element_stiffness: np.ndarray
+    element_damping: np.ndarray
+    element_max_length: np.ndarray
+    triangles: np.ndarray
+    hinge_nodes: np.ndarray
+    hinge_weights: np.ndarray
+    hinge_stiffness: np.ndarray
+    hinge_friction: np.ndarray
+    membrane_area: np.ndarray
+    cloths: tuple
+    colliders: tuple
+
+
 @dataclass(frozen=True, eq=False)
 class Model:
     """Everything that does not change during a run, on one Warp device.
@@ -107,7 +147,7 @@ class Model:
     collider_normals: wp.array
     collider_velocity: np.ndarray
     gravity: wp.vec3
-    host: dict
+    host: HostArrays
 
     def state(self, *, velocity=None) -> State:
         """A new State at the set-up positions, at rest unless ``velocity`` [m/s] is given."""
@@ -135,8 +175,8 @@ class Model:
         import scipy.sparse as sp
 
         h = self.host
-        nodes, weights = h["hinge_nodes"], h["hinge_weights"]
-        stiffness = h["hinge_stiffness"] + (h["hinge_friction"] if friction else 0.0)
+        nodes, weights = h.hinge_nodes, h.hinge_weights
+        stiffness = h.hinge_stiffness + (h.hinge_friction if friction else 0.0)
         rows = np.repeat(nodes, 4, axis=1).ravel()
         cols = np.tile(nodes, (1, 4)).ravel()
         values = (stiffness[:, None, None] * weights[:, :, None] * weights[:, None, :]).ravel()
@@ -148,20 +188,20 @@ class Model:
     @property
     def triangles(self) -> np.ndarray:
         """Cloth triangles on the host, shape (t, 3)."""
-        return self.host["triangles"]
+        return self.host.triangles
 
     @property
     def elements(self) -> np.ndarray:
-        return self.host["elements"]
+        return self.host.elements
 
     @property
     def limited_elements(self) -> np.ndarray:
         """Which elements have a plastic limit (bool per element, on the host)."""
-        return np.isfinite(self.host["element_params"][:, 3])
+        return np.isfinite(self.host.element_max_length)
 
     @property
     def kinematic(self) -> np.ndarray:
-        return self.host["kinematic"]
+        return self.host.kinematic
 
     @property
     def collider_count(self) -> int:

@@ -175,9 +175,9 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
         "cloth_crossings": cloth_crossings(points, model.triangles, model.device),
         "body_vertices_through_cloth": body_vertices_through(points, model.triangles, the_body.colliders,
                                                              device=model.device),
-        "max_elongation": max_elongation(points, host["elements"], host["element_params"][:, 0], limited),
-        "max_sewn_elongation": max_elongation(sewn.points, host["elements"], host["element_params"][:, 0], limited),
-        "elements_beyond_limit": elements_beyond_limit(points, host["elements"], model.element_max_length.numpy()),
+        "max_elongation": max_elongation(points, host.elements, host.element_rest_length, limited),
+        "max_sewn_elongation": max_elongation(sewn.points, host.elements, host.element_rest_length, limited),
+        "elements_beyond_limit": elements_beyond_limit(points, host.elements, model.element_max_length.numpy()),
         "relaxation": {
             "sewing_iterations": sewn.relaxation.iterations + sewn.settling.iterations, "draping_steps": draped.steps,
             "draping_seconds": round(draped.seconds, 3), "at_rest": draped.at_rest,

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -67,8 +69,11 @@ class Settings:
     quick: bool = False
 
 
-def build(settings: Settings = Settings(), *, device: str | None = None, **_) -> Scene:
-    """The rod-in-the-wind scene as ``settings`` say, its kernels on ``device``."""
+def build(settings: Settings = Settings(), *, device: str | None = None, out: Path | None = None, resume: bool = False,
+          progress: bool = False, on_save: Callable | None = None) -> Scene:
+    """The rod-in-the-wind scene as ``settings`` say, its kernels on ``device`` (``out``,
+    ``resume``, ``progress`` and ``on_save``, which scenes that keep their set-up take, it has no
+    use for)."""
     solver, quick = settings.solver, settings.quick
     dt = solver_class(solver).default_dt if settings.dt is None else settings.dt
     spacing = settings.spacing if settings.spacing is not None else 0.025 if quick else 0.0125

@@ -70,10 +70,10 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
     def steps_by(frame: int) -> int:
         return min(frame * steps_per_frame, steps_total)
     faces = model.triangles
-    colliders = model.host["colliders"]
+    colliders = model.host.colliders
     host = model.host
     limited = model.limited_elements
-    rest = host["element_params"][:, 0]
+    rest = host.element_rest_length
     probe = ColliderProbe(colliders, model.device)
 
     state, scratch = model.state(), model.state()

@@ -8,6 +8,8 @@ off. Blender and Newton run the same scene in ``benchmarks/peers/``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -42,8 +44,10 @@ class Settings:
     quick: bool = False
 
 
-def build(settings: Settings = Settings(), *, device: str | None = None, **_) -> Scene:
-    """The sphere-drop scene as ``settings`` say, its kernels on ``device``."""
+def build(settings: Settings = Settings(), *, device: str | None = None, out: Path | None = None, resume: bool = False,
+          progress: bool = False, on_save: Callable | None = None) -> Scene:
+    """The sphere-drop scene as ``settings`` say, its kernels on ``device`` (``out``, ``resume``,
+    ``progress`` and ``on_save``, which scenes that keep their set-up take, it has no use for)."""
     solver = settings.solver
     dt = solver_class(solver).default_dt if settings.dt is None else settings.dt
     grid = settings.grid if settings.grid is not None else 24 if settings.quick else 64

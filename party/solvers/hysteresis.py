@@ -123,7 +123,7 @@ class BendingHysteresis:
 
     def __init__(self, model: Model) -> None:
         self.model = model
-        self.active = model.hinge_count > 0 and float(model.host["hinge_friction"].max(initial=0.0)) > 0.0
+        self.active = model.hinge_count > 0 and float(model.host.hinge_friction.max(initial=0.0)) > 0.0
 
     def add_forces(self, state: State, f: wp.array) -> None:
         """Add the slip's constant forces at ``state`` to ``f`` [N]."""

@@ -33,12 +33,12 @@ def total_energy(model: Model, points: np.ndarray) -> float:
     """Spring energy sum 1/2 e (|r_k - r_i| - l0)^2 plus the free nodes' potential energy in
     gravity [J]; kinetic energy is left out (it is what relaxation removes)."""
     h = model.host
-    e, params = h["elements"], h["element_params"]
+    e = h.elements
     length = np.linalg.norm(points[e[:, 1]] - points[e[:, 0]], axis=1)
-    spring = 0.5 * float(np.sum(params[:, 1] * (length - params[:, 0]) ** 2))
+    spring = 0.5 * float(np.sum(h.element_stiffness * (length - h.element_rest_length) ** 2))
     g = np.array([model.gravity[0], model.gravity[1], model.gravity[2]], float)
-    free = ~h["kinematic"]
-    return spring - float(np.sum(h["mass"][free] * (points[free] @ g)))
+    free = ~h.kinematic
+    return spring - float(np.sum(h.mass[free] * (points[free] @ g)))
 
 
 @dataclass

@@ -68,7 +68,7 @@ class SolverExplicit:
         self.collision = self.filters.collision
         self.air = AirForces(model, air) if air is not None else None
         self._f_ext = wp.zeros(model.node_count, dtype=wp.vec3, device=model.device)
-        self._bending_stiffness = wp.array((model.host["hinge_stiffness"] + model.host["hinge_friction"]).astype(np.float32),
+        self._bending_stiffness = wp.array((model.host.hinge_stiffness + model.host.hinge_friction).astype(np.float32),
                                            dtype=float, device=model.device)
 
     @classmethod
@@ -143,11 +143,11 @@ def critical_time_step(model: Model) -> float:
     import scipy.sparse as sp
 
     h = model.host
-    free = ~h["kinematic"]
+    free = ~h.kinematic
     if model.element_count == 0 or not free.any():
         return float("inf")
-    e, k = h["elements"], h["element_params"][:, 1]
-    p = h["points"]
+    e, k = h.elements, h.element_stiffness
+    p = h.points
     d = p[e[:, 1]] - p[e[:, 0]]
     d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-30)
     blocks = k[:, None, None] * d[:, :, None] * d[:, None, :]
@@ -162,9 +162,9 @@ def critical_time_step(model: Model) -> float:
     K = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
     if model.hinge_count:
         K = K + sp.kron(model.bending_matrix(), sp.identity(3), format="csr")
-    scale = np.repeat(np.where(free, 1.0 / np.sqrt(h["mass"]), 0.0), 3)
+    scale = np.repeat(np.where(free, 1.0 / np.sqrt(h.mass), 0.0), 3)
     lam = _largest_eigenvalue(sp.diags(scale) @ K @ sp.diags(scale))
-    c = h["element_params"][:, 2]
+    c = h.element_damping
     nodes = model.node_count
     C = sp.csr_matrix((np.concatenate([c, c, -c, -c]), (np.concatenate([e[:, 0], e[:, 1], e[:, 0], e[:, 1]]),
                                                         np.concatenate([e[:, 0], e[:, 1], e[:, 1], e[:, 0]]))),

@@ -3,8 +3,8 @@ Macklin, Yuksel, Kim: "Vertex Block Descent", SIGGRAPH 2024), and the kernels th
 
 The kernels come in two builds (:data:`DESCENT`, :func:`descent_kernels`): one for a net of
 springs and hinges alone, and one that also reads membrane triangles and bending-hysteresis
-sliders (:func:`extra_terms`). A net without them sweeps some 8 % faster in its own build than
-in one that skips their empty rows at run time (docs/design.md, Speed).
+sliders (:func:`extra_terms`). A net without them sweeps faster in its own build than in one that
+skips their empty rows at run time.
 """
 
 from typing import NamedTuple
@@ -182,6 +182,7 @@ def blend_node(i: int, x: wp.array(dtype=wp.vec3), previous: wp.array(dtype=wp.v
 class DescentKernels(NamedTuple):
     """One build of the descent's kernels (see the module docstring)."""
 
+    node_steps: wp.Kernel
     plane_reactions: wp.Kernel
     block_descent: wp.Kernel
     sweep_workers: wp.Kernel
@@ -275,6 +276,16 @@ def descent_kernels(with_extra: bool) -> DescentKernels:
                 d_new += (gap / wp.dot(n, inverse * n)) * (inverse * n)
             disp[i] = d_new
 
+    @wp.kernel(name=f"node_steps_{suffix}")
+    def node_steps(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float, disp: wp.array(dtype=wp.vec3),
+                   grad: wp.array(dtype=wp.vec3), hess: wp.array(dtype=wp.mat33)):
+        """Every node's gradient [N] and Hessian block [N/m] of the incremental potential, as
+        ``descend_node`` steps on them (for checks against finite differences)."""
+        i = wp.tid()
+        step = node_terms(i, terms, x_start, dt, disp)
+        grad[i] = step.grad
+        hess[i] = step.hess
+
     @wp.kernel(name=f"plane_reactions_{suffix}")
     def plane_reactions(terms: DescentTerms, x_start: wp.array(dtype=wp.vec3), dt: float,
                         disp: wp.array(dtype=wp.vec3)):
@@ -328,7 +339,7 @@ def descent_kernels(with_extra: bool) -> DescentKernels:
                         blend_node(i, disp, disp_previous, disp_before, omegas[iteration], terms.plane_normal)
                 worker_barrier(sync, workers)
 
-    return DescentKernels(plane_reactions, block_descent, sweep_workers)
+    return DescentKernels(node_steps, plane_reactions, block_descent, sweep_workers)
 
 
 DESCENT = {False: descent_kernels(False), True: descent_kernels(True)}

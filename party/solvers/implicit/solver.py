@@ -246,6 +246,49 @@ class SolverImplicit:
             self._advance(source, target, control, dt / count)
             source = target
 
+    def node_steps(self, x_start: np.ndarray, disp: np.ndarray, y: np.ndarray, dt: float,
+                   slip_world: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Each node's gradient [N] and Hessian block [N/m] of the incremental potential the
+        sweeps minimise, G(d) = sum_i m_i / (2 dt^2) |d_i - y_i|^2 + E(x(t) + d) plus the
+        dampers' c / (2 dt) |d_k - d_i|^2, at displacements ``disp`` [m] from ``x_start`` [m]
+        with inertial targets ``y`` (displacements [m]) and the hysteresis sliders' slips
+        ``slip_world`` (curvature vectors [1/m], one per stencil; default none), as a sweep's
+        Newton step takes them. Shapes (n, 3) and (n, 3, 3). For checks of the energies against
+        finite differences; a step sets ``y`` and the slips itself."""
+        dev = self.model.device
+        n = self.model.node_count
+        start = wp.array(np.asarray(x_start, np.float32), dtype=wp.vec3, device=dev)
+        d = wp.array(np.asarray(disp, np.float32), dtype=wp.vec3, device=dev)
+        self._y.assign(np.asarray(y, np.float32))
+        self._slip_world.assign(np.zeros((self.model.hinge_count, 3), np.float32) if slip_world is None
+                                else np.asarray(slip_world, np.float32))
+        grad = wp.zeros(n, dtype=wp.vec3, device=dev)
+        hess = wp.zeros(n, dtype=wp.mat33, device=dev)
+        wp.launch(self._descent.node_steps, dim=n, inputs=[self._terms, start, float(dt), d, grad, hess], device=dev)
+        return grad.numpy().astype(float), hess.numpy().astype(float)
+
+    def descend_once(self, x_start: np.ndarray, disp: np.ndarray, y: np.ndarray, dt: float,
+                     plane_normal: np.ndarray | None = None, plane_offset: np.ndarray | None = None) -> np.ndarray:
+        """One Newton step of every free node on its share of the incremental potential (as
+        :meth:`node_steps` takes it), in node order, each node's neighbours as the steps before
+        left them, with body planes ``plane_normal`` (unit, (n, 3); zero: none) and
+        ``plane_offset`` [m] ((n,)) that a node must stay on the outer side of. Returns the
+        displacements [m] after. For checks of a sweep against its quadratic model; a step
+        sets its planes from the last Collision() itself."""
+        dev = self.model.device
+        n = self.model.node_count
+        start = wp.array(np.asarray(x_start, np.float32), dtype=wp.vec3, device=dev)
+        d = wp.array(np.asarray(disp, np.float32), dtype=wp.vec3, device=dev)
+        self._y.assign(np.asarray(y, np.float32))
+        self._plane_normal.assign(np.zeros((n, 3), np.float32) if plane_normal is None
+                                  else np.asarray(plane_normal, np.float32))
+        self._plane_offset.assign(np.zeros(n, np.float32) if plane_offset is None
+                                  else np.asarray(plane_offset, np.float32))
+        order = wp.array(np.arange(n, dtype=np.int32), dtype=int, device=dev)
+        wp.launch(self._descent.block_descent, dim=n, inputs=[0, order, self._terms, start, float(dt), d], device=dev)
+        self._plane_normal.zero_()
+        return d.numpy().astype(float)
+
     def worker_yields(self) -> int:
         """How often a sweep worker thread, waiting for the others, has given its core away
         (after :class:`~party.launch.LaunchSettings`' ``yield_after_spins``; a running count, read from the device). A 64 x
@@ -482,11 +525,12 @@ def node_neighbours(model: Model, bend) -> NeighbourRows:
     """The :class:`NeighbourRows` of ``model``'s elements and its bending matrix ``bend`` (SciPy CSR)."""
     h = model.host
     n = model.node_count
-    e, element_params = h["elements"].astype(np.int64), h["element_params"]
+    e = h.elements.astype(np.int64)
+    element_params = np.stack([h.element_rest_length, h.element_stiffness, h.element_damping], axis=1)
     rows = np.concatenate([e[:, 0], e[:, 1]])
     other = np.concatenate([e[:, 1], e[:, 0]])
     params = np.zeros((rows.size, 4))
-    params[:, :3] = np.concatenate([element_params[:, :3], element_params[:, :3]])
+    params[:, :3] = np.concatenate([element_params, element_params])
     coo = bend.tocoo()
     off_diagonal = coo.row != coo.col
     bend_rows, bend_cols = coo.row[off_diagonal].astype(np.int64), coo.col[off_diagonal].astype(np.int64)
@@ -513,13 +557,13 @@ def slider_stiffness(model: Model) -> float:
     bending-hysteresis slider (L the bending matrix with the sliders stuck,
     ``Model.bending_matrix(friction=True)``; 0 without hysteresis)."""
     h = model.host
-    sliding = h["hinge_friction"] > 0.0
+    sliding = h.hinge_friction > 0.0
     if not sliding.any():
         return 0.0
-    nodes = np.unique(h["hinge_nodes"][sliding])
-    nodes = nodes[~h["kinematic"][nodes]]
+    nodes = np.unique(h.hinge_nodes[sliding])
+    nodes = nodes[~h.kinematic[nodes]]
     stuck = model.bending_matrix(friction=True).diagonal()
-    return float(np.max(stuck[nodes] / h["mass"][nodes], initial=0.0))
+    return float(np.max(stuck[nodes] / h.mass[nodes], initial=0.0))
 
 
 @dataclass(frozen=True)
@@ -542,8 +586,8 @@ class NodeCoupling:
         """The coupling of ``model``'s free nodes, ``bend`` its bending matrix L (SciPy CSR)."""
         h = model.host
         n = model.node_count
-        e = h["elements"].astype(np.int64)
-        k, c = h["element_params"][:, 1], h["element_params"][:, 2]
+        e = h.elements.astype(np.int64)
+        k, c = h.element_stiffness, h.element_damping
         springs = np.bincount(e[:, 0], k, n) + np.bincount(e[:, 1], k, n)
         damping = np.bincount(e[:, 0], c, n) + np.bincount(e[:, 1], c, n)
         bend_diagonal = bend.diagonal()
@@ -555,11 +599,11 @@ class NodeCoupling:
             grads = np.stack([-inverse[:, 0] - inverse[:, 1], inverse[:, 0], inverse[:, 1]], axis=1)
             c_max = np.linalg.eigvalsh(model.triangle_membrane_c.numpy().astype(float)).max(axis=1)
             share = (area * c_max)[:, None] * np.sum(grads * grads, axis=2)
-            membrane = np.bincount(h["triangles"].reshape(-1), share.reshape(-1), n)
-        free = ~h["kinematic"]
+            membrane = np.bincount(h.triangles.reshape(-1), share.reshape(-1), n)
+        free = ~h.kinematic
         diagonal = springs + bend_diagonal + membrane
         coupling = springs + bend_off + membrane
-        return cls(diagonal[free], coupling[free], damping[free], h["mass"][free].astype(float))
+        return cls(diagonal[free], coupling[free], damping[free], h.mass[free].astype(float))
 
     def largest_rate(self) -> float:
         """The largest K_ii / m_i [1/s^2] (0 without free nodes)."""
@@ -583,8 +627,8 @@ def node_sliders(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """CSR of the bending-hysteresis elements at each node: entries stencil * 4 + the node's
     corner, for the stencils with a slider and the corners with a weight."""
     h = model.host
-    nodes = h["hinge_nodes"].astype(np.int64)
-    corners = (h["hinge_friction"][:, None] > 0.0) & (h["hinge_weights"] != 0.0)
+    nodes = h.hinge_nodes.astype(np.int64)
+    corners = (h.hinge_friction[:, None] > 0.0) & (h.hinge_weights != 0.0)
     slots = np.arange(nodes.size, dtype=np.int64).reshape(nodes.shape)[corners]
     offsets, order = csr_order(nodes[corners], model.node_count)
     return offsets.astype(np.int32), slots[order].astype(np.int32)
@@ -593,8 +637,8 @@ def node_sliders(model: Model) -> tuple[np.ndarray, np.ndarray]:
 def node_triangles(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """CSR of the membrane triangles at each node; entries are triangle * 3 + the node's corner
     (empty rows where no triangle carries a membrane)."""
-    tri = model.host["triangles"].astype(np.int64)
-    membrane = model.host["membrane_area"] > 0.0
+    tri = model.host.triangles.astype(np.int64)
+    membrane = model.host.membrane_area > 0.0
     slots = np.arange(tri.size, dtype=np.int64).reshape(-1, 3)[membrane].ravel()
     offsets, order = csr_order(tri[membrane].ravel(), model.node_count)
     return offsets.astype(np.int32), slots[order].astype(np.int32)
@@ -609,10 +653,10 @@ def color_nodes(model: Model) -> tuple[list[int], np.ndarray]:
 
     h = model.host
     n = model.node_count
-    pairs = [h["elements"].astype(np.int64)]
-    membrane = h["triangles"][h["membrane_area"] > 0.0].astype(np.int64)
+    pairs = [h.elements.astype(np.int64)]
+    membrane = h.triangles[h.membrane_area > 0.0].astype(np.int64)
     pairs += [membrane[:, [0, 1]], membrane[:, [1, 2]], membrane[:, [2, 0]]]
-    hinge = h["hinge_nodes"].astype(np.int64)
+    hinge = h.hinge_nodes.astype(np.int64)
     for a in range(4):
         for b in range(a + 1, 4):
             pairs.append(hinge[:, [a, b]])
@@ -628,7 +672,7 @@ def color_nodes(model: Model) -> tuple[list[int], np.ndarray]:
         while c in taken:
             c += 1
         colors[i] = c
-    free = ~h["kinematic"]
+    free = ~h.kinematic
     ids = np.flatnonzero(free)
     ids = ids[np.argsort(colors[ids], kind="stable")]
     counts = np.bincount(colors[ids], minlength=int(colors.max()) + 1 if n else 1)
