@@ -45,7 +45,8 @@ class Fabric:
         bending_hysteresis: Kawabata's bending hysteresis 2HB [N*m/m]: the width of the
             moment-curvature loop. Bending then meets a frictional moment of up to HB = 2HB / 2
             per unit width, which holds the cloth in any shape where it is not exceeded (a
-            Jenkins element, 5 times as stiff as the bending, beside each bending stencil);
+            Jenkins element, ``HYSTERESIS_STIFFNESS`` times as stiff as the bending
+            (:mod:`party.model.builder`), beside each thread's bending stencil);
             0: none.
         membrane: Carry the in-plane elasticity on the triangles as a continuum membrane
             (orthotropic St. Venant-Kirchhoff in plane stress: Young's moduli times thickness
@@ -56,6 +57,10 @@ class Fabric:
         poisson: Poisson's ratio nu_12 of the membrane: the weft contraction per unit warp
             stretch [-]; nu_21 = nu_12 tensile_weft / tensile_warp.
         description, source: Free text; a library fabric names where its values come from.
+
+    The defaults of ``strain_limit``, ``restitution``, ``friction``, ``momentum_propagation``
+    and ``cloth_friction`` are Table 1's, so a fabric that gives none has the paper's contact
+    and plastic limit; ``thickness`` defaults to 3 mm, about a wool flannel's.
     """
 
     name: str

@@ -27,6 +27,7 @@ class Stop(Exception):
     pass
 
 
+@pytest.mark.slow
 def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_path, solver_name):
     """Stopped after its second save while draping, the drape leaves only its checkpoint; resumed,
     it does not sew again, goes on from the saved step to rest, with nothing through the body or
@@ -66,6 +67,7 @@ def test_a_stopped_drape_resumes_from_its_checkpoint_without_sewing_again(tmp_pa
     assert logged[0][0] <= saves[0]
 
 
+@pytest.mark.slow
 def test_a_drape_stopped_while_sewing_goes_on_from_the_last_stage_it_finished(tmp_path):
     """Stopped after the closing stage of its sewing, a drape resumed does not place the panels
     again (the first stage's start), settles, drapes and writes a clean result."""

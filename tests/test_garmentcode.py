@@ -58,6 +58,7 @@ def pencil_drape(tmp_path_factory):
 
 @pytest.mark.parametrize("path", [p for p in SAMPLES if "pencil" not in p.name],
                          ids=lambda p: p.name.removesuffix("_specification.json"))
+@pytest.mark.slow
 def test_sample_drapes_on_mean_all_closed_and_clean(path, tmp_path):
     from party.garment.sewing import SewingSettings
 
@@ -69,6 +70,7 @@ def test_sample_drapes_on_mean_all_closed_and_clean(path, tmp_path):
 
 
 @pytest.mark.parametrize("name", ["dress_sleeves_flare", "hoody_mean", "dress_pencil", "js_mean_all"])
+@pytest.mark.slow
 def test_sample_drapes_closed_and_clean_with_the_implicit_solver(name, tmp_path):
     # draping in 1/300 s steps needs the crossing guard (the flare dress: 21 crossings without
     # it), checking every edge (the hoody: 2 crossings when only edges near cloth were checked)
@@ -85,6 +87,7 @@ def test_sample_drapes_closed_and_clean_with_the_implicit_solver(name, tmp_path)
         assert summary["relaxation"]["at_rest"]  # its shape steady to a millimetre, within 10 s
 
 
+@pytest.mark.slow
 def test_pencil_dress_drapes_on_mean_all_closed_and_clean(pencil_drape):
     _, summary = pencil_drape
     _assert_closed_and_clean(summary)
@@ -142,6 +145,7 @@ def test_tshirt_sews_with_no_crossing_in_a_stiff_and_a_light_fabric(fabric):
     assert cloth_crossings(sewn.points, sewn.net.triangles) == 0
 
 
+@pytest.mark.slow
 def test_the_jumpsuit_in_denim_sews_closed():
     """Denim's explicit steps are 2.3 times shorter than wool flannel's: after the sewing's
     6,000 iterations the jumpsuit's seams were still 227 mm apart and were joined so. Sewing
@@ -156,6 +160,7 @@ def test_the_jumpsuit_in_denim_sews_closed():
     assert sewn.relaxation.iterations > 6000
 
 
+@pytest.mark.slow
 def test_the_tshirt_in_denim_drapes_with_the_explicit_solver_with_no_crossing(tmp_path):
     """The explicit drape relaxes with the crossing guard, and checks what its interval left
     unchecked when the relaxation stops: without the guard the denim tshirt ended with 9
@@ -168,6 +173,7 @@ def test_the_tshirt_in_denim_drapes_with_the_explicit_solver_with_no_crossing(tm
     _assert_closed_and_clean(summary)
 
 
+@pytest.mark.slow
 def test_the_shirt_in_denim_drapes_with_the_implicit_solver_to_rest_unstretched(tmp_path):
     """Stiff, heavy cloth that the body holds up: the implicit solve keeps each node that was
     against the body on its side (a body plane), so Collision() no longer stops nodes that the
@@ -200,6 +206,7 @@ def jumpsuit_sewn_stretch(fabric_name: str) -> np.ndarray:
     return np.linalg.norm(sewn.points[nodes[:, 1]] - sewn.points[nodes[:, 0]], axis=1) / rest
 
 
+@pytest.mark.slow
 def test_stiff_cloth_settles_on_while_rounds_help_though_its_energy_has_settled():
     # cotton's small explicit steps met the energy criterion in the jumpsuit's first settling round
     # with 184 elements beyond 1.5 times rest (up to 7.6 at hips and shoulders), which ended the rounds
@@ -208,6 +215,7 @@ def test_stiff_cloth_settles_on_while_rounds_help_though_its_energy_has_settled(
     assert jumpsuit_sewn_stretch("cotton").max() < SewingSettings().overstretched
 
 
+@pytest.mark.slow
 def test_denim_settles_on_while_its_excess_falls_though_its_worst_elements_stretch_further():
     """The limit gathers a stretched panel's excess into the elements the body holds out: the
     denim jumpsuit's first settling rounds left 140 and 170 elements beyond 1.5 times rest, up to

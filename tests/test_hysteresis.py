@@ -24,6 +24,7 @@ def tip_drop(two_hb: float, solver: str = "explicit", segments: int = 16) -> flo
 
 
 @pytest.mark.parametrize("solver,segments", [("explicit", 16), ("implicit", 4)])
+@pytest.mark.slow
 def test_moment_below_hb_everywhere_sticks_at_the_jenkins_stiffness(solver, segments):
     """With HB above the root moment W L^2 / 2 nothing slips: the strip bends as one of
     rigidity (1 + f) B, i.e. its tip drops 1 / (1 + f) as far (linear beam). The implicit
@@ -34,6 +35,7 @@ def test_moment_below_hb_everywhere_sticks_at_the_jenkins_stiffness(solver, segm
     assert stuck / free == pytest.approx(1.0 / (1.0 + HYSTERESIS_STIFFNESS), rel=0.02)
 
 
+@pytest.mark.slow
 def test_small_hysteresis_slips_and_bends_nearly_as_far():
     free = tip_drop(0.0)
     slipping = tip_drop(2 * 0.1 * ROOT_MOMENT)

@@ -80,7 +80,7 @@ def test_a_nodes_neighbour_row_holds_each_element_once_and_its_bending_row_once(
     assert not np.any(owner == rows.nodes)
 
 
-@pytest.mark.parametrize("name,iterations,slack", [("cotton", 10, 1e-5), ("denim", 200, 1e-5), ("denim", 20, 5e-3)])
+@pytest.mark.parametrize("name,iterations,slack", [("cotton", 10, 1e-5), pytest.param("denim", 200, 1e-5, marks=pytest.mark.slow), ("denim", 20, 5e-3)])
 def test_damped_free_motion_loses_energy_every_step(rng, name, iterations, slack):
     """A sheet set swinging (a smooth velocity field, a little noise), no gravity, no contact:
     elastic plus kinetic energy never grows under backward Euler. Cotton at the default 10
@@ -147,6 +147,7 @@ def test_large_steps_stay_stable_for_every_fabric(name):
     assert elongation.max() <= (1 + fabric.strain_limit) * 1.001
 
 
+@pytest.mark.slow
 def test_stiff_light_cloth_drapes_as_with_four_times_the_sweeps():
     """A Cusick specimen of denim at 15 mm, stiff for its inertia (K dt^2 / m 5,600 at
     1/300 s, the solver's own step rather than the drape tests' 1/1,000 s): the sweeps the
@@ -170,6 +171,7 @@ def test_stiff_light_cloth_drapes_as_with_four_times_the_sweeps():
     assert abs(given_folds - many_folds) <= 1.5
 
 
+@pytest.mark.slow
 def test_stiff_light_cloth_drapes_at_case_6s_mesh_as_with_the_explicit_solver():
     """Case 6's denim specimen at its 7.5 mm as ``party validate`` drapes it with each solver
     (the implicit one at 1/1,000 s and the drape's 15 sweeps): DC within 3 points and folds
@@ -185,6 +187,7 @@ def test_stiff_light_cloth_drapes_at_case_6s_mesh_as_with_the_explicit_solver():
     assert abs(implicit.nodes - explicit.nodes) <= 2
 
 
+@pytest.mark.slow
 def test_stiff_strip_rests_alike_at_the_origin_and_a_metre_from_it():
     """A cantilever of 40 segments at overhang 2c: the sweeps' corrections to its nodes fall
     below a single-precision coordinate's round-off 1 m from the origin (1.2e-7 m). Solving

@@ -67,6 +67,7 @@ def test_restitution_within_1_percent(solver_name):
     assert_passed(restitution.run_case(COTTON, solver_name, quick=True))
 
 
+@pytest.mark.slow
 def test_cantilever_bending_length_within_3_percent(tmp_path, solver_name):
     result = cantilever.run_case(COTTON, solver_name, quick=True, out=tmp_path)
     assert_passed(result)
@@ -78,6 +79,7 @@ def test_cantilever_needs_a_bending_rigidity():
     assert result.checks == [] and result.details["skipped"] == "fabric 'wool_flannel' has no bending rigidity"
 
 
+@pytest.mark.slow
 def test_cusick_longer_bending_length_drapes_less():
     """Cotton's bending length (B / W)^(1/3) is 18.8 mm, knit jersey's 13.0 mm: cotton stands
     out further (higher DC). Both lie between hanging straight (DC 0) and not draping at all
@@ -249,6 +251,7 @@ def measured_drapes():
 
 
 @MEASURED
+@pytest.mark.slow
 def test_both_solvers_drape_a_measured_cusick_specimen_alike(measured_drapes):
     """Measured fabric B (wool tropical, with its bending hysteresis) on Matsudaira's
     drapemeter at 7.5 mm, first specimen: the implicit solver's DC within 3 points of the
@@ -261,6 +264,7 @@ def test_both_solvers_drape_a_measured_cusick_specimen_alike(measured_drapes):
 
 
 @MEASURED
+@pytest.mark.slow
 def test_measured_fabrics_drape_within_case_7s_tolerance(measured_drapes, solver_name):
     """Case 7 as ``party validate`` runs it: fabrics B, C and F (measured DC 49.8, 50.7 and
     28.3 %, 5, 5 and 7 folds), the mean of three specimens within 8 DC points and 1 fold of the

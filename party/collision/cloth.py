@@ -81,9 +81,9 @@ def searched_velocity(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), pr
     it) where the node's step now, from x by v dt, lies within ``margin`` [m] of the proposed
     step's segment from x, else v. The searched steps then cover the present ones, and also what
     the next step's solve proposes again for cloth that the plastic limit holds where it is:
-    searched along the held steps (some 290 nodes of GarmentCode's flare dress proposing
-    millimetres that the limit takes back), the next step's first Collision() found them beyond
-    both keep tests (:func:`moved_beyond`) and searched again, at every step."""
+    searched along the held steps only, a garment whose limit takes back millimetres that each
+    solve proposes would have its next step's first Collision() find them beyond both keep tests
+    (:func:`moved_beyond`) and search again, at every step."""
     i = wp.tid()
     start = x[i]
     if step_near(start, start + v[i] * dt, start, proposed[i] * dt, margin):
@@ -113,8 +113,8 @@ def moved_beyond(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_ref: 
     velocities' sum at the search), leaves half the margin of the step it was searched for
     (from ``x_ref`` by ``step_ref``, :func:`~party.collision.geometry.step_near`). The second
     keeps the candidates of cloth that the plastic limit holds where it is while every step's
-    solve proposes the same millimetres of stretch (GarmentCode's flare dress: some 270 nodes
-    at its shoulders and waist, which had the cloth searched again at every step)."""
+    solve proposes the same millimetres of stretch (the shoulders and waist of a garment sewn
+    tighter than its body), which would otherwise have the cloth searched at every step."""
     i = wp.tid()
     shift = share * total[0]
     moved = x[i] - x_ref[i] - shift

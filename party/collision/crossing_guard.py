@@ -5,10 +5,9 @@ step; two edges can still pass through each other between nodes, more so over a 
 After a step, the guard looks for mesh edges that pass through a triangle (sharing no node)
 at the end of the step but did not at its start, and sends the nodes of each such pair back
 to where the step began, at rest (or, checking every few steps, to where the last check left
-them). It checks every edge: checking only edges with a node whose
-collision search had found cloth triangles along its step saved some 15 % of a self-colliding
-step, but let an edge longer than the search's reach pass through a triangle unseen
-(GarmentCode's hoody draped with the implicit solver: 2 crossings). It repeats until no new
+them). It checks every edge, not only those whose nodes' collision search found cloth along
+their step: an edge longer than the search's reach can pass through a triangle that no node of
+it came near. It repeats until no new
 crossing is left: at worst every node is back at its start, which had none, so no step ever
 creates a crossing. Crossings present before a step (from a set-up) are left alone and not
 counted as new.
@@ -19,9 +18,8 @@ No other triangle can have come to an edge before one of their nodes has moved h
 since, beyond the mean displacement of all nodes (a common translation moves no pair closer: cloth
 falling as a whole keeps its lists); the edges and triangles at such nodes are searched with BVHs
 at every check, and the lists are made anew once too many nodes have (``hot_share``; both in
-:class:`GuardSettings`).
-Searching every edge at every check had cost the reference dress's implicit drape 3 ms a step,
-15 % of its time (:meth:`CrossingGuard._check`). Where the cloth moves so fast that lists would
+:class:`GuardSettings`). Searching every edge at every check would cost a large share of a
+drape's step (:meth:`CrossingGuard._check`). Where the cloth moves so fast that lists would
 be made again within a few checks (a sheet striking a sphere at large steps), each edge is
 tested against the triangles its box meets, unlisted: that search finds no more than a listing
 does and costs less than half of one.
@@ -380,8 +378,8 @@ class CrossingGuard:
     def _spread(self, x: wp.array) -> None:
         """Grow the nodes to revert until none leaves an element stretched beyond its plastic
         limit (a node going back a large step, or several small ones, would otherwise leave its
-        neighbours' elements stretched by as far as they moved meanwhile: 21 % beyond rest in
-        the dress demo, checked every 33 steps)."""
+        neighbours' elements stretched by as far as they moved meanwhile, well beyond the
+        limit where the guard checks every few steps)."""
         m = self.model
         if not self._limited:
             return
@@ -434,9 +432,9 @@ class CrossingGuard:
         ``changed``: the edges at those nodes (and those marked in the last round) are tested
         against every triangle their box meets, the triangles at those nodes against every
         edge whose box meets them, and every other pair is as the last round found it. The
-        same answer as checking every pair again, to the bit, for the few nodes a round moves
-        (GarmentCode's flare dress at rest had reverts in most implicit steps, and each round
-        after the first had cost as much as the first)."""
+        same answer as checking every pair again, to the bit, for the few nodes a round moves:
+        a garment at rest may have reverts in most steps, and a full check per round would cost
+        each round as much as the first."""
         m = self.model
         self.rechecks += 1
         self.found.zero_()

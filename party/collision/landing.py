@@ -3,17 +3,15 @@
 A node that reaches a body within a step stops there, while its neighbours, not yet there,
 move on for the rest of the step: over a step in which a node moves farther than about half
 its elements' length, the element between them is stretched to the plastic limit in that one
-step, and friction on the pressure of the stretched cloth then holds the stretch. A 64 x 64
-sheet dropped at 1.7 cm a step onto the benchmark's sphere kept 236 of its 8,064 warp and
-weft elements beyond 9 % (the limit is 10 %) after 1 s at 1/150 s a step, 25 at 1/300 s and 1
-at 1/1,200 s. Cutting only the steps in which a node near the body would move farther than
-:data:`LANDING_REACH` of its shortest edge relative to the body left 41 and 9, in 171
-substeps for 150 steps and 306 for 300 (docs/design.md, the implicit solver).
+step, and friction on the pressure of the stretched cloth then holds the stretch. Smaller steps
+everywhere would cure it at their cost everywhere; cutting only the steps in which a node near
+the body would move farther than :data:`LANDING_REACH` of its shortest edge relative to the body
+spends the substeps where cloth lands.
 
 A node's motion over the step is taken at both ends of the step: its velocity at the start and
 that velocity plus what gravity adds over the step. Judged by the start alone, cloth at rest
-over a body was never cut: a 16 x 16 sheet dropped onto the sphere in steps of 0.3 s stretched
-to 2.0 times rest, and in one step of 1 s to 15.8.
+over a body would never be cut, and a step long enough for it to fall far would stretch it
+many times over.
 """
 
 from __future__ import annotations
@@ -32,8 +30,8 @@ node near a body may move relative to it in one (sub)step."""
 
 MAX_LANDING_SUBSTEPS = 100
 """Most substeps a step is cut into for landing cloth; a step that would need more is refused
-(:class:`~party.errors.SimulationUnstable`) rather than cut short of what it needs. (At 8, the
-100 x 100 sphere drop at 1/60 s needed 9 and was cut into 8.)"""
+(:class:`~party.errors.SimulationUnstable`) rather than cut short of what it needs; a
+hundred is far beyond what a frame's step needs and bounds the step's cost."""
 
 
 @wp.kernel

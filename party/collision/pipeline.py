@@ -27,24 +27,18 @@ wp.set_module_options({"enable_backward": False})  # no adjoints: party never di
 
 CLOTH_MARGIN_PER_ELEMENT = 0.25
 """The cloth search's margin, as a share of the net's median element, where ``search_margin``
-would list the net's own layer (:meth:`CollisionPipeline.default_cloth_margin`): the 1 m square
-of cotton at 32k nodes (5.6 mm apart, 1.4 mm) kept 2.0 triangles a node after five steps
-against 24.8 with 4 mm, at 100k (3.2 mm apart, 0.8 mm) none against 39.2, and took 451 and 511
-ms a step against 482 and 623 (``out/scratch/square_margin.py``, in turn)."""
+would list the net's own layer (:meth:`CollisionPipeline.default_cloth_margin`). A search lists
+the triangles within eps plus its margin; in a net finer than that reach it would list the
+node's own flat ring, which no fold can bring into contact but every detection would test. A
+quarter of an element keeps the ring out and still leaves the half-margin a node may move
+before a search is repeated larger than most steps."""
 
 OWN_LAYER_LISTED = 0.5
 """Cloth triangles a node that ``search_margin`` may add to the set-up positions' listing before
-the cloth's margin narrows (:data:`CLOTH_MARGIN_PER_ELEMENT`). A search lists the triangles
-within eps plus its margin, and in a net finer than that reach it lists the node's own layer
-beyond what a fold can bring (``Model.node_near``), none of which can be a contact while the
-layer is flat: a flat net's ring of them comes in at some 2 to 14 a node (a 1 m square of cotton
-at 32k nodes, 5.6 mm apart: 0 with 0.5 mm, 2.0 with 1 to 2 mm, 13.8 with 3 and 4 mm;
-``out/scratch/margin_cands.py``). Once listed they are tested at every detection, though most
-are dropped early (:data:`CLOTH_MARGIN_PER_ELEMENT`). A narrower margin means more searches, so
-nets that list almost none of their own keep the widest: the dress demo's 15 mm net lists 0.05 a
-node with 4 mm, and searched 1,500 times in its 12,000 steps of 1e-4 s with 3.75 mm against
-1,412 with 4 mm, some 27 ms a search with the interval lists then (14 since), in 3 to 9 s more
-(``out/scratch/dress_margin.py``; docs/design.md, Collision)."""
+the cloth's margin narrows (:data:`CLOTH_MARGIN_PER_ELEMENT`). A narrower margin means more
+searches, so a net that lists almost none of its own layer keeps the widest; one listing half a
+triangle a node or more pays for its own ring at every detection, more than the extra searches
+cost."""
 
 
 @dataclass(frozen=True)
@@ -301,9 +295,8 @@ class CollisionPipeline:
         device). ``continuing`` marks a second Collision() within one step (after the plastic
         limit): the body's candidates also serve a node whose step stays within half the margin
         of the box of the step they were searched for (:func:`~party.collision.body.covered`),
-        and only where the limit moved it beyond both is it searched again. (Reusing the step's
-        candidates without this check, 14 of a 64 x 64 self-colliding drop's 300 steps had a
-        node's step beyond the region searched for the cloth, 21 for the body.) The cloth's
+        and only where the limit moved it beyond both is it searched again (reused without this
+        check, the candidates would miss a node that the limit sent beyond them). The cloth's
         serve, at either Collision(), while every node stays within half the margin of where it
         was searched from, or every node's step within half the margin of the step it was
         searched for (a search in the second looks along the step the first had where the
@@ -314,8 +307,8 @@ class CollisionPipeline:
         nodes it or this pass has changed (or sent a correction) so far, a node's body response
         where neither has. On the same positions and velocities they would compute what they
         computed in the last pass, which changed nothing, so the result is bit for bit that of
-        full passes; once a pass changes nothing, the passes stop. (After the first pass of the
-        reference dress's steps about 100 of its 3,312 nodes still change.)
+        full passes; once a pass changes nothing, the passes stop. After the first pass only a
+        few layers' worth of nodes still change, so the later passes cost little.
 
         ``changed`` (with ``continuing``) continues the last Collision() of this step: its first
         pass leaves out, likewise, what that one's last pass left as it was, unless non-zero in
@@ -401,8 +394,8 @@ class CollisionPipeline:
         """Cloth triangles against the body's vertices (:mod:`party.collision.body_vertices`)
         over the candidates of the last search, at the start of every pass, so that the pass's
         cloth responses carry a push on to the layers above and its body pass has the last word
-        for every node. (Run once per Collision() only, before the passes, the reference dress
-        took 8 s of draping to come to rest instead of 4, in one run.)"""
+        for every node: run once before the passes, a push from the body's vertices would stop at
+        the first layer and the cloth above would settle onto it over many steps."""
         if not self.has_body_vertices:
             return
         m = self.model
@@ -430,10 +423,9 @@ class CollisionPipeline:
         may have left the region searched for them: each stays within margin/2 of where it
         was searched from, and its box grew by eps + margin/2; static body triangles do not
         move at all. A moving body is searched again for every node, every step, but not in
-        a ``continuing`` Collision() of the same step (:func:`~party.collision.body.covered`). (Searched
-        for every node whenever one node had left its region, the reference dress's drape
-        searched on 1,199 of its 1,200 steps, 2 ms a step, for the few nodes that swing at
-        rest.)"""
+        a ``continuing`` Collision() of the same step (:func:`~party.collision.body.covered`).
+        Searching node by node matters at rest, where a few swinging nodes would otherwise have
+        every node searched at almost every step."""
         m = self.model
         dev = m.device
         half = 0.5 * self.body_margin

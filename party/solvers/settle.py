@@ -22,12 +22,10 @@ DRAPE_SWEEPS = 15
 """The implicit solver's sweeps per step when cloth drapes to rest (garments, Cusick
 specimens), half as many again as its default: a solve cut short leaves the soft modes of
 hanging folds drifting, each step starting them a little off their equilibrium, and cloth held
-out by its own stiffness crumples. GarmentCode's flare dress on mean_all came to rest after
-10 s of draping at 30 mm and was still moving after 10 s at 20 mm with 10 sweeps, after 7 s and
-8.5 s with 15 (and after 5 s at 30 mm with 20). A denim Cusick specimen at 7.5 mm and 1/1,000 s
-(K dt^2 / m = 2,000, which :data:`~party.solvers.implicit.solver.STIFFNESS_PER_SWEEP` gives 10
-sweeps) crumpled to DC 13.4 % with 3 folds at 10 sweeps and draped to 41.2, 40.3, 42.1 and
-41.4 % with 9 folds at 15, 20, 25 and 40."""
+out by its own stiffness crumples (a denim Cusick specimen does at 10 sweeps, where
+:data:`~party.solvers.implicit.solver.STIFFNESS_PER_SWEEP` alone would allow them). At 15 the
+drape no longer changes with more sweeps, and garments come to rest in a few seconds of
+draping."""
 
 @dataclass
 class Settled:

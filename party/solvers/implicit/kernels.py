@@ -28,10 +28,9 @@ def inertial_target(
 
     The solve works on the step's displacements d = x - x(t), not on positions: a sweep's
     correction to a node is often below the round-off of a single-precision position (2e-9 m
-    at 3 cm, 6e-8 m at 1 m), and would be lost; a displacement resolves it. A cotton
-    cantilever of 0.6 mm segments stalled with its chord at 43.6 degrees at 3 cm from the
-    origin and at 65.6 degrees at 1 m, against 42.4 at rest; it now rests at 42.4 (43.1 at
-    1 m, where the state's own round-off jitters it; see docs/design.md).
+    at 3 cm, 6e-8 m at 1 m), and would be lost; a displacement resolves it. Solved in positions,
+    a fine stiff cantilever stalls short of its rest shape, the farther the farther it lies from
+    the origin.
 
     The iterate starts at y, moved back against gravity by as much as the last solve moved the
     node back from its own y (between nothing and the whole of G dt^2; after Chen et al.'s
@@ -104,10 +103,10 @@ def body_planes(first: int, contact_face: wp.array(dtype=int), faces: wp.array(d
     The contact face itself may be a neighbour of the face the node lies over: over a convex
     body a neighbour's plane passes above the node's own face, and the response
     (:func:`~party.collision.body.collide_body`) takes the face whose plane the node reached
-    first, within a quarter of eps beside it. A node resting there took the one face on one
-    step and the other on the next, and the plane of the face beside it, turned round that
-    face's edge, lifted it: on the sphere drop at 1/150 s, 21 nodes rocked by 0.2 to 0.65 mm
-    at every step (none with the nearest face)."""
+    first, within a quarter of eps beside it. The plane is that of the face the node lies over,
+    not the contact face: a node resting between two faces would take the one on one step and
+    the other on the next, and the plane of the face beside it, turned round that face's edge,
+    would lift it, so that it rocked at every step."""
     i = first + wp.tid()
     push[i] = wp.vec3(0.0)
     f = contact_face[i]

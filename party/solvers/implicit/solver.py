@@ -30,35 +30,31 @@ SLIDER_STEP_RATIO = 600.0
 """Largest stuck bending stiffness over inertia, L_ii dt^2 / m_i with L the bending matrix with
 its sliders stuck (:func:`slider_stiffness`), at the nodes of a bending-hysteresis slider in one
 (sub)step. Beyond it the sweeps leave a node's fall unresisted in the first steps and the slider
-keeps the kink: with the hysteresis element 5 times as stiff as the bending, a cotton cantilever
-of 4 segments whose root moment is below HB bent 1/6 as far as without hysteresis, as it must,
-at bending-only ratios up to 193, and 5 times as far at 343 (``--solver explicit`` agrees); the
-stuck ratio is about 6 times those."""
+keeps the kink: a cantilever whose root moment stays below HB must bend only as far as its
+stuck stiffness allows, as the explicit solver's does, and does so within this ratio."""
 
 STIFFNESS_PER_SWEEP = 400.0
 """Stiffness over inertia, K_ii dt^2 / m_i (the largest over the nodes: springs, membrane and
 bending), that one sweep of a (sub)step answers for: a step takes at least K_ii dt^2 / m_i
 over this many sweeps. With fewer, the sweeps fall so far short of the solve that their
 Chebyshev-accelerated error feeds on itself from step to step, and cloth held up by its
-stiffness crumples: a Cusick specimen of denim at 15 mm (ratio 5,600 at 1/300 s) draped to DC
-9.5 % at 10 sweeps a step, 41 % at 15 and 40 % at 30 (the explicit solver: 36 %), and one of
-1,000 N/m at 100 g/m^2 and 7.5 mm (13,600) crumpled at 22 sweeps, not at 25. Garments in wool
-flannel at 15-30 mm stay within 1,400, so their sweeps are as given; denim's grow below about
-20 mm. (Substeps instead, three of 10 sweeps for denim at 7.5 mm, kept the specimen for 2 s
-and then let it crumple; 60 sweeps in one step held it.)"""
+stiffness crumples (a denim Cusick specimen does; at this ratio it drapes as with the explicit
+solver). Garments in wool flannel at 15-30 mm stay within a few times this, so their sweeps are
+as given; denim's grow below about 20 mm. Substeps in place of sweeps hold such cloth only for a
+while: the sweeps' error, not the step, is what lets it crumple."""
 
 MAX_SWEEPS = 100
 """Most sweeps :data:`STIFFNESS_PER_SWEEP` gives a (sub)step; a stiffer model takes substeps."""
 
 CONTACT_ROUNDS = 3
 """Most times a (sub)step solves again around the nodes Collision() stopped
-(:meth:`SolverImplicit.resolve_contacts`; the default of ``contact_rounds``). The implicit
-dress's frames at steps from 1/250 to 1/400 s had 4 to 49 elements beyond 1.12 times rest in all
-with three rounds, against 106 to 435 with none (``out/scratch/resolve_vars.py``), and two rounds
-15 to 163."""
+(:meth:`SolverImplicit.resolve_contacts`; the default of ``contact_rounds``). Each round lets
+the cloth follow the nodes the last one stopped; after three, the few elements a dress's frames
+still hold beyond its limit are no more than a fraction of those one round leaves."""
 
 CONTACT_SWEEPS = 5
-"""Sweeps of each re-solve (10 did no better on the dress, in one run of each)."""
+"""Sweeps of each re-solve: the region is small and starts near its solution, and more sweeps
+leave no less stretch."""
 
 CONTACT_REACH = 0.01
 """A node off the body whose end of step Collision() moved farther than this share of its
@@ -291,9 +287,8 @@ class SolverImplicit:
 
     def worker_yields(self) -> int:
         """How often a sweep worker thread, waiting for the others, has given its core away
-        (after :class:`~party.launch.LaunchSettings`' ``yield_after_spins``; a running count, read from the device). A 64 x
-        64 sheet's steps gave it away some 160 times a step alone and some 1,500 beside a busy
-        process."""
+        (after :class:`~party.launch.LaunchSettings`' ``yield_after_spins``; a running count, read
+        from the device): how much a busy machine is slowing the sweeps."""
         return int(self._sync.counters.numpy()[3])
 
     def substeps(self, dt: float) -> int:
@@ -313,9 +308,9 @@ class SolverImplicit:
     def spectral_radius(self, dt: float) -> float:
         """The spectral radius rho the Chebyshev acceleration assumes for a (sub)step of ``dt``
         [s]: ``chebyshev``, or less where the nodes are so lightly coupled for their inertia that
-        the sweeps converge faster (:meth:`NodeCoupling.jacobi_bound`). Assuming 0.9 where the
-        sweeps' own radius is about 0.6 slows them: a cotton strip's first longitudinal period
-        at 10 mm and 1/6,900 s came out 1.2 % long at 10 sweeps, 0.03 % at 40 or at rho 0.59."""
+        the sweeps converge faster (:meth:`NodeCoupling.jacobi_bound`): assuming a larger radius
+        than the sweeps' own over-weights their history and slows them (a finely stepped strip's
+        period comes out long)."""
         return min(self.chebyshev, self._coupling.jacobi_bound(dt))
 
     def _omegas(self, dt: float) -> tuple[np.ndarray, wp.array]:
@@ -364,20 +359,15 @@ class SolverImplicit:
         it (for the rest of the step), and the free nodes within :data:`CONTACT_RINGS` rings
         of one whose end of step it moved farther than :data:`CONTACT_REACH` of its shortest
         edge take :data:`CONTACT_SWEEPS` sweeps of the same implicit step from where they are,
-        so that they follow the held nodes within the step. Returns the nodes re-solved
+        so that they follow the held nodes within the step; a dress draped in large steps then
+        keeps its elongation near the explicit solver's. Returns the nodes re-solved
         (None where none was moved so far; reads one number from the device). Called only
         where the model has cloth collision (:class:`~party.solvers.filters.StepFilters`). On the
         CPU (``serial_region``) the sweeps visit the re-solved nodes alone, listed by a
         breadth-first search from the moved ones on one thread
         (:func:`~.kernels.contact_region`); on a GPU the region grows ring by ring, a thread per
         node (:func:`~.kernels.spread_region`), and the sweeps run over every node, those out
-        of it held (the same result, bit for bit).
-
-        ``party run dress --solver implicit`` (1/300 s): the largest elongation over its frames
-        is 1.21 instead of 1.77, in its last frame 1.106 instead of 1.50, and its frames hold 43
-        elements beyond 1.12 times rest in all instead of 413 (the explicit solver: 1.106,
-        none). A 64 x 64 sheet dropped on a sphere with self-collision costs about as before, a
-        100 x 100 one some 10 % more."""
+        of it held (the same result, bit for bit)."""
         m = self.model
         dev = m.device
         if first:
