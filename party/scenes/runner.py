@@ -138,7 +138,6 @@ def run_scene(scene: Scene, out: Path, *, resume: bool = False, progress: bool =
                 write_json(summary_path, summary)
                 raise
             _record(out, frame, points, faces, model, probe, limited, rest, totals)
-            forget(scene.solver)
             save_checkpoint(checkpoint, inputs=json.dumps(inputs, sort_keys=True), frame=frame, time=state.time,
                             **{k: v for k, v in totals.items()}, **memory_of(state, "state"),
                             **memory_of(scene.solver, "solver"))

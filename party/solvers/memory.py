@@ -10,10 +10,13 @@ them from the solver (or a State) and every party object it holds, by path; :fun
 them back into objects built afresh for the same scene. Everything else a solver holds is either
 fixed by the model and its settings, or rewritten before it is read in a step.
 
-Search structures are not carried: a BVH's shape depends on the boxes it was first built from.
-:func:`forget` drops them (each object's ``forget_search``, which also asks for a new search at
-the next step), and the runner calls it at every checkpoint, in the run that goes on as in the
-run that resumes, so that both search afresh from the same positions at the same step.
+Search structures are not carried (a BVH's shape depends on the boxes it was first built
+from): a resumed run calls :func:`forget` after :func:`restore` (each object's
+``forget_search``, which asks for a new search at the next step) and searches afresh. What a
+step computes does not depend on what a search listed: cloth contacts are kept in order of
+distance, then triangle, the body's earliest contact wins, and the crossing guard's answer is
+that of testing every pair. So the resumed run goes on bit for bit, and the run it continues
+keeps its searches across checkpoints.
 """
 
 from __future__ import annotations
