@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional
 
 import typer
 from rich.console import Console
+from rich.table import Table
 
 from .errors import InvalidInput, PartyError
 
@@ -124,6 +126,8 @@ def drape_command(
                                 help="Go on from OUT/checkpoint.npz (the sewing's last stage done, or the draping)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Write into an --out folder that holds files party did "
                                    "not write (they are kept; only party's own are replaced)."),
+    time_limit: float = typer.Option(600.0, "--time-limit", help="Wall seconds the drape may take: past them it "
+                                     "stops, keeps its result and checkpoint, and fails its quality gate."),
 ) -> None:
     """Sew a pattern onto a body and drape it under gravity."""
     from .device import resolve
@@ -143,7 +147,7 @@ def drape_command(
     summary = drape(pattern, body, the_fabric, out_dir,
                     DrapeSettings(spacing=spacing_mm / 1000.0, solver=check_solver(solver), device=device,
                                   pattern_units=units, seams_file=seams, body_units=body_units, up=up, images=images,
-                                  progress=progress, resume=resume, overwrite=overwrite))
+                                  progress=progress, resume=resume, overwrite=overwrite, time_limit=time_limit))
     out.print(f"{pattern.name}: {summary['nodes']} nodes, {summary['seams']} seams (max gap "
               f"{summary['max_seam_gap_mm']:.2f} mm), body penetrations {summary['body_penetrations']} "
               f"(body vertices through the cloth {summary['body_vertices_through_cloth']}), "
@@ -167,6 +171,91 @@ def drape_command(
     if not summary["quality"]["passed"]:
         err.print(f"[bold yellow]warning:[/] the drape missed its quality gates: {'; '.join(summary['quality']['reasons'])}",
                   highlight=False, soft_wrap=True)
+
+
+@app.command("batch")
+def batch_command(
+    patterns: list[str] = typer.Argument(..., help="Pattern files, folders or globs (any format `party drape` reads)."),
+    bodies: str = typer.Option("M", "--bodies", help="Bodies, comma-separated: dress-form sizes or mesh files."),
+    fabrics: str = typer.Option("wool_flannel", "--fabrics", help="Fabrics, comma-separated: library names or files."),
+    out_dir: Path = typer.Option(..., "--out", help="Dataset folder (one folder per item, manifest.parquet, "
+                                 "contact_sheet.png, logs/)."),
+    workers: Optional[int] = typer.Option(None, "--workers", help="Items draped at once (default: one per core)."),
+    ray: Optional[str] = typer.Option(None, "--ray", help="Run the items as Ray tasks on the cluster at ADDRESS, or "
+                                      "'auto' (the running cluster, else a local one)."),
+    time_limit: float = typer.Option(600.0, "--time-limit", help="Wall seconds each drape may take."),
+    spacing_mm: float = typer.Option(20.0, "--spacing-mm", help="Node spacing of the net [mm]."),
+    solver: str = typer.Option("explicit", "--solver", help="explicit or implicit."),
+    device: Optional[str] = typer.Option(None, "--device", help="cpu, cuda or auto."),
+    resume: bool = typer.Option(False, "--resume", help="Skip the items the manifest holds; go on with the others."),
+    images: bool = typer.Option(True, "--images/--no-images", help="Render each item's views (and the contact sheet)."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Write into an --out folder that holds files party did "
+                                   "not write (they are kept; only party's own are replaced)."),
+) -> None:
+    """Drape every pattern on every body in every fabric into a dataset, unattended."""
+    from .batch import BatchSettings, plan, run_batch
+    from .batch.report import contact_sheet, tally
+    from .batch.worker import ItemOptions
+    from .fabric import fabric_by_name
+    from .output.folder import check_output_path, open_output
+    from .solvers.registry import check_solver
+
+    if not (spacing_mm > 0):
+        raise InvalidInput(f"--spacing-mm must be positive, got {spacing_mm}")
+    check_output_path(out_dir)
+    items = plan(patterns, [b.strip() for b in bodies.split(",")], [f.strip() for f in fabrics.split(",")])
+    for name in dict.fromkeys(i.fabric for i in items):
+        fabric_by_name(name)
+    settings = BatchSettings(workers=workers, ray=ray, resume=resume,
+                             item=ItemOptions(spacing_mm=spacing_mm, solver=check_solver(solver), time_limit=time_limit,
+                                              images=images, device=device))
+    with open_output(out_dir, "batch", overwrite=overwrite, description=f"{len(items)} items") as folder:
+        with _batch_progress(progress) as (on_start, on_done):
+            manifest = run_batch(items, folder.path, settings, on_start=on_start, on_done=on_done)
+        rows = list(manifest.rows.values())
+        if images and rows:
+            contact_sheet(folder.path / "contact_sheet.png", folder.path, rows)
+    statuses, reasons = tally(rows)
+    table = Table()
+    table.add_column("status")
+    table.add_column("items", justify="right")
+    for status in ("passed", "failed", "timeout", "error"):
+        table.add_row(status, str(statuses[status]))
+    out.print(table)
+    out.print(f"{statuses['passed']} of {len(rows)} items passed ({100.0 * statuses['passed'] / max(len(rows), 1):.0f} %)"
+              + (f"; reasons of the {len(rows) - statuses['passed']} that did not:" if reasons else ""), highlight=False)
+    for reason, count in reasons.most_common():
+        out.print(f"  {count:4d}  {reason}", highlight=False)
+    out.print(f"results in {out_dir}/ (manifest.parquet{', contact_sheet.png' if images and rows else ''})")
+
+
+@contextmanager
+def _batch_progress(shown: bool):
+    """(on_start, on_done) for :func:`party.batch.run_batch`: a progress bar of items done,
+    passed and failed with the time left, and a line for each item that did not pass."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    counts = {"passed": 0, "failed": 0}
+    bar = Progress(TextColumn("batch"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[tally]}"),
+                   TimeRemainingColumn(), console=out, disable=not shown)
+    task = None
+
+    def on_start(total: int, done: int) -> None:
+        nonlocal task
+        if done:
+            out.print(f"resuming: skipping {done} items already in the manifest")
+        task = bar.add_task("batch", total=total, completed=done, tally="")
+
+    def on_done(item, row: dict) -> None:
+        counts["passed" if row["status"] == "passed" else "failed"] += 1
+        if row["status"] != "passed":
+            bar.console.print(f"{item.name}: {row['status']}: {'; '.join(row['reasons'] or [])}", highlight=False,
+                              soft_wrap=True)
+        bar.update(task, advance=1, tally=f"passed {counts['passed']}, not {counts['failed']}")
+
+    with bar:
+        yield on_start, on_done
 
 
 @app.command("validate")

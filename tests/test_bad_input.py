@@ -51,8 +51,9 @@ PATTERN_CASES = {
                         "front.edge[1] is already sewn"),
     "edge sewn to itself": (set_(["seams", 0, "b"], {"panel": "front", "edge": 1}),
                             "seam front.edge[1] - front.edge[1] joins an edge to itself"),
-    "seam lengths differ": (set_(["panels", "back", "vertices"], [[0, 0], [40, 0], [40, 150], [0, 150]]),
-                            "differ by more than a factor"),
+    "seam lengths beyond any gather": (set_(["panels", "back", "vertices"], [[0, 0], [40, 0], [40, 250], [0, 250]]),
+                                       "edge lengths 50.0 cm and 250.0 cm would gather 5.0 to 1, beyond the 4 to 1 a "
+                                       "garment gathers"),
     "open outline": (set_(["panels", "front", "edges"], [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}]),
                      "outline is open between edge 2 and edge 0"),
     "self-intersecting outline": (set_(["panels", "front", "vertices"], [[0, 0], [40, 50], [40, 0], [0, 50]]),

@@ -12,6 +12,7 @@ import pytest
 from conftest import wait_for_file
 
 from party.body.load import load_body
+from party.errors import InvalidInput
 from party.fabric import fabric_by_name
 from party.garment.assemble import assemble
 from party.pattern import load_pattern
@@ -128,3 +129,28 @@ def test_resuming_from_another_drapes_checkpoint_is_refused_in_one_line(tmp_path
     assert result.stderr.strip() == (f"error: {out / 'checkpoint.npz'} belongs to another drape (different fabric); "
                                      "remove it or drop --resume")
     assert sorted(p.name for p in out.iterdir()) == [".party", "checkpoint.npz"]
+
+
+@pytest.mark.slow
+def test_a_drape_past_its_time_limit_keeps_its_result_and_checkpoint_and_a_resume_goes_on(tmp_path):
+    out = tmp_path / "out"
+    settings = DrapeSettings(spacing=SPACING, images=False, progress=False, time_limit=0.5)
+    flannel = fabric_by_name("wool_flannel")
+    first = drape_module.drape(DRESS, "M", flannel, out, settings)
+    assert first["timed_out"] and not first["quality"]["passed"]
+    assert "ran past its time limit of 0.5 s and was stopped there" in first["quality"]["reasons"]
+    assert {"garment.obj", "summary.json", "checkpoint.npz"} <= {p.name for p in out.iterdir()}
+    with np.load(out / "checkpoint.npz") as saved:
+        assert int(saved["draping_step"]) == first["relaxation"]["draping_steps"]
+
+    second = drape_module.drape(DRESS, "M", flannel, out, replace(settings, resume=True, time_limit=900.0))
+    assert not second["timed_out"]
+    assert not any(r.startswith("ran past") for r in second["quality"]["reasons"])
+    assert second["relaxation"]["draping_steps"] > first["relaxation"]["draping_steps"]
+    assert second["wall_seconds"] > first["wall_seconds"]
+    assert not (out / "checkpoint.npz").exists()
+
+
+def test_a_time_limit_that_is_not_a_positive_number_is_refused_in_one_line():
+    with pytest.raises(InvalidInput, match=r"^--time-limit must be a positive number of seconds, got -1$"):
+        DrapeSettings(time_limit=-1.0)

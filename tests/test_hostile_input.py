@@ -299,13 +299,16 @@ def test_the_quality_gates_name_each_miss():
     from party.output.quality import drape_quality
 
     good = {"body_distance_mm": {"nearest": 3.0, "median": 44.0}, "body_penetrations": 0, "cloth_crossings": 0,
-            "max_seam_gap_mm": 0.5, "seam_gaps_mm": {"a-b": 0.5}, "max_elongation": 1.1, "relaxation": {"at_rest": True}}
+            "max_seam_gap_mm": 0.5, "seam_gaps_mm": {"a-b": 0.5}, "max_elongation": 1.1, "relaxation": {"at_rest": True},
+            "time_limit_s": 600.0, "timed_out": False}
     assert drape_quality(good, 3e-3) == {"passed": True, "reasons": []}
     bad = {"body_distance_mm": {"nearest": 3.0, "median": 526.0}, "body_penetrations": 2, "cloth_crossings": 1, "max_seam_gap_mm": 450.0,
-           "seam_gaps_mm": {"a-b": 0.5, "c-d": 450.0}, "max_elongation": 6.2, "relaxation": {"at_rest": True}}
+           "seam_gaps_mm": {"a-b": 0.5, "c-d": 450.0}, "max_elongation": 6.2, "relaxation": {"at_rest": False},
+           "time_limit_s": 30.0, "timed_out": True}
     assert drape_quality(bad, 3e-3)["reasons"] == ["not on the body: half its nodes are more than 526 mm from it",
                                                    "2 nodes inside the body", "1 cloth crossings",
-                                                   "seam c-d open 450.0 mm", "stretched to 6.20 times rest (at most 1.3)"]
+                                                   "seam c-d open 450.0 mm", "stretched to 6.20 times rest (at most 1.3)",
+                                                   "not at rest", "ran past its time limit of 30 s and was stopped there"]
 
 
 @pytest.mark.parametrize("change, differing", [

@@ -1,5 +1,5 @@
 """Sewing: a tube sewn from two panels closes around a cylinder; relaxation lowers the energy
-monotonically to a plateau."""
+monotonically to a plateau; a gathered seam closes with its gathers evenly spread."""
 
 import numpy as np
 import pytest
@@ -58,3 +58,71 @@ def test_relaxation_energy_falls_monotonically_to_a_plateau(sewn_tube):
     assert np.all(np.diff(energy) <= 1e-5 * start)
     tail = energy[-6:]
     assert tail.max() - tail.min() < 1e-5 * start
+
+
+def gathered_skirt(ratio: float = 2.0):
+    """A tube of circumference 2 W gathered at its top into a band of circumference 2 W / ratio."""
+    hb, gap = 0.05, 0.03
+    band_w = W / ratio
+    rb, rt = band_w / np.pi, W / np.pi
+
+    def rectangle(w, h):
+        pts = np.array([[0, 0], [w, 0], [w, h], [0, h]])
+        return tuple(line(pts[k], pts[(k + 1) % 4]) for k in range(4))
+
+    def around(width, radius, z, back):
+        return Placement(np.array([width / 2 if back else -width / 2, radius if back else -radius, z]),
+                         euler_xyz_degrees([90, 0, 180 if back else 0]), wrap_radius=radius)
+
+    panels = {"front": Panel("front", rectangle(W, H), np.array([0.0, 1.0]), placement=around(W, rt, 0.0, False)),
+              "back": Panel("back", rectangle(W, H), np.array([0.0, 1.0]), placement=around(W, rt, 0.0, True)),
+              "band_front": Panel("band_front", rectangle(band_w, hb), np.array([0.0, 1.0]),
+                                  placement=around(band_w, rb, H + gap, False)),
+              "band_back": Panel("band_back", rectangle(band_w, hb), np.array([0.0, 1.0]),
+                                 placement=around(band_w, rb, H + gap, True))}
+    seams = (Seam(EdgeRef("front", 1), EdgeRef("back", 3)), Seam(EdgeRef("front", 3), EdgeRef("back", 1)),
+             Seam(EdgeRef("band_front", 1), EdgeRef("band_back", 3)),
+             Seam(EdgeRef("band_front", 3), EdgeRef("band_back", 1)),
+             Seam(EdgeRef("front", 2), EdgeRef("band_front", 0)), Seam(EdgeRef("back", 2), EdgeRef("band_back", 0)))
+    return Pattern("gathered", panels, seams)
+
+
+def test_a_gather_pairs_even_shares_of_the_longer_side_with_the_shorter():
+    garment = assemble(gathered_skirt(2.0), 0.02)
+    xy = np.concatenate([m.xy for m in garment.panels])
+    for s in (4, 5):
+        pairs = garment.seam_pairs[garment.seam_of_pair == s]
+        along_long = np.linalg.norm(np.diff(xy[pairs[:, 0]], axis=0), axis=1)
+        along_short = np.linalg.norm(np.diff(xy[pairs[:, 1]], axis=0), axis=1)
+        # each stretch of the band takes twice its length of the skirt, the same all along
+        assert along_long / along_short == pytest.approx(np.full(len(along_long), 2.0), rel=1e-6)
+        # the gathered edge rests at the band's length (the gathering thread), the cloth behind less shirred
+        edge = set(pairs[:, 0].tolist())
+        on_edge = np.array([a in edge and b in edge for a, b in garment.net.elements])
+        rest = garment.net.element_rest_lengths()
+        flat = np.linalg.norm(np.diff(garment.net.uv[garment.net.elements], axis=1)[:, 0], axis=1)
+        assert rest[on_edge & (garment.net.kinds == 1)] == pytest.approx(flat[on_edge & (garment.net.kinds == 1)] / 2)
+
+
+def test_a_two_to_one_gather_closes_around_a_body_evenly_without_stretching_its_band():
+    from party.garment.sewing import SewingSettings, sew
+
+    body = Body("cylinder", (rod(0.8, 0.045, center=(0, 0, 0.15), axis=(0, 0, 1)),), {"shoulder": 0.3})
+    garment = assemble(gathered_skirt(2.0), 0.02)
+    sewn = sew(garment, body, wool_flannel(), SewingSettings(max_iterations=3000))
+    assert sewn.max_seam_gap < 2e-3
+    assert ColliderProbe(body.colliders).penetrations(sewn.points) == 0
+    band = np.isin(np.searchsorted(garment.node_offsets, np.arange(garment.node_count), side="right") - 1, [2, 3])
+    band_nodes = np.unique(sewn.node_map[band])
+    e, rest = sewn.net.elements, sewn.net.element_rest_lengths()
+    in_band = np.isin(e, band_nodes).all(axis=1) & (sewn.net.kinds < 2)
+    length = np.linalg.norm(sewn.points[e[:, 1]] - sewn.points[e[:, 0]], axis=1)
+    assert (length / rest)[in_band].max() < 1.3
+    # the seam's nodes go evenly round the body: the gathers are spread, not bunched
+    seam = np.unique(sewn.node_map[garment.seam_pairs[np.isin(garment.seam_of_pair, [4, 5])].ravel()])
+    angle = np.sort(np.arctan2(sewn.points[seam, 1], sewn.points[seam, 0]))
+    steps = np.diff(np.r_[angle, angle[0] + 2 * np.pi])
+    assert steps.max() < 2.0 * steps.mean()
+    # and the skirt's top is drawn in to the band's girth
+    radius = np.hypot(sewn.points[seam, 0], sewn.points[seam, 1])
+    assert 2 * np.pi * np.median(radius) == pytest.approx(W, rel=0.15)

@@ -1,5 +1,11 @@
 """From a pattern to a garment: every panel meshed at one spacing, seams given equal node
-counts on both sides, paired nodes listed, and the sewn (merged) net once seams are closed."""
+counts on both sides, paired nodes listed, and the sewn (merged) net once seams are closed.
+
+A seam whose sides differ in length is a gather: the longer side is sewn evenly onto the
+shorter, its k-th node onto the shorter side's k-th, both spread evenly along their edges. The
+gathering thread holds the longer side's edge at the shorter's length, so the elements along
+that edge rest at the shorter side's lengths; the cloth behind the edge keeps its own and
+folds, as gathered cloth does."""
 
 from __future__ import annotations
 
@@ -11,6 +17,7 @@ from ..errors import InvalidInput
 from ..meshing.net import ClothNet
 from ..meshing.panel_mesh import PanelMesh, mesh_panel, segments_for
 from ..pattern.pattern import Pattern
+from .gathers import gathered_rest_lengths
 
 
 @dataclass(frozen=True)
@@ -87,6 +94,18 @@ class Garment:
         return sewn, node_map
 
 
+GATHER_DENSITY = 1.5
+"""A gathered seam's sides get as many nodes as the longer side's length asks for, but its
+shorter side's nodes no closer than the spacing over this: finer ones would shorten every
+explicit step of the garment; the longer side's nodes spread out instead."""
+
+
+def seam_segments(shorter: float, longer: float, spacing: float) -> int:
+    """Segments on both sides of a seam of side lengths ``shorter`` and ``longer`` [m]."""
+    return max(segments_for(shorter, spacing),
+               min(segments_for(longer, spacing), segments_for(GATHER_DENSITY * shorter, spacing)))
+
+
 def assemble(pattern: Pattern, spacing: float) -> Garment:
     """Mesh every panel of ``pattern`` at ``spacing`` [m] with matching seam node counts."""
     if not (np.isfinite(spacing) and 1e-3 <= spacing <= 0.2):
@@ -94,7 +113,7 @@ def assemble(pattern: Pattern, spacing: float) -> Garment:
     counts: dict[tuple[str, int], int] = {}
     for seam in pattern.seams:
         la, lb = pattern.edge(seam.a).length(), pattern.edge(seam.b).length()
-        n = max(segments_for(la, spacing), segments_for(lb, spacing))
+        n = seam_segments(min(la, lb), max(la, lb), spacing)
         counts[(seam.a.panel, seam.a.edge)] = n
         counts[(seam.b.panel, seam.b.edge)] = n
     meshes, offsets = [], [0]
@@ -118,14 +137,18 @@ def assemble(pattern: Pattern, spacing: float) -> Garment:
 
     nets = [m.net for m in meshes]
     shift = np.asarray(offsets[:-1])
+    elements = np.concatenate([n.elements + s for n, s in zip(nets, shift)]).astype(np.int32)
+    rest = gathered_rest_lengths(pattern, tuple(meshes), np.asarray(offsets), elements,
+                                 np.concatenate([n.element_rest_lengths() for n in nets]))
     net = ClothNet(
         uv=np.concatenate([n.uv for n in nets]),
-        elements=np.concatenate([n.elements + s for n, s in zip(nets, shift)]).astype(np.int32),
+        elements=elements,
         kinds=np.concatenate([n.kinds for n in nets]).astype(np.int32),
         widths=np.concatenate([n.widths for n in nets]),
         triangles=np.concatenate([n.triangles + s for n, s in zip(nets, shift)]).astype(np.int32),
         shape=(0, 0),
         warp_share=np.concatenate([n.element_warp_share() for n in nets]),
+        rest_lengths=rest,
     )
     corner_xy = np.concatenate([m.xy[m.net.triangles] for m in meshes])
     return Garment(pattern, float(spacing), tuple(meshes), np.asarray(offsets), net, pairs.astype(np.int64),

@@ -32,6 +32,9 @@ from ..solvers.settle import DRAPE_SWEEPS, SettleSettings, Settled, settle
 Saver = Callable[[int, list, State], None]
 """``on_save(step, energy log [(step, J)], state)``: a drape's checkpoint, called at each check."""
 
+Stop = Callable[[], bool]
+"""``stop()``: true when the drape must stop where it is (its time limit passed)."""
+
 
 @dataclass(frozen=True)
 class KineticDrape:
@@ -51,10 +54,10 @@ class KineticDrape:
         return self.iterations
 
     def run(self, model: Model, state: State, first_step: int, energy: list[tuple[int, float]], on_save: Saver,
-            progress: bool) -> tuple[Settled, list[tuple[int, float]]]:
+            progress: bool, stop: Stop | None = None) -> tuple[Settled, list[tuple[int, float]]]:
         """Drape ``model`` from ``state`` after ``first_step`` iterations that logged ``energy``
-        [(iteration, J)]; ``on_save`` at every log. Returns the outcome (``at_rest``: the
-        energy settled) and the energy log."""
+        [(iteration, J)]; ``on_save`` at every log, and there ``stop()`` may end it. Returns the
+        outcome (``at_rest``: the energy settled) and the energy log."""
         dt = SolverExplicit.relaxation_step(model)
         with relax_progress("draping", self.iterations, progress) as on_log:
             logged = list(energy)
@@ -67,7 +70,8 @@ class KineticDrape:
             relaxation = StaticRelaxation(model, collision=presets.guarded(dt, body_vertices=True),
                                           max_speed=self.max_speed, momentum=self.momentum, solver=SolverExplicit.name)
             relaxed = relaxation.relax(state, dt, max_iterations=self.iterations, min_iterations=self.min_iterations,
-                                       on_log=on_log_and_save, resumed=RelaxResult(first_step, list(energy)))
+                                       on_log=on_log_and_save, resumed=RelaxResult(first_step, list(energy)),
+                                       should_stop=stop)
         return Settled(state, relaxed.iterations, relaxed.iterations * dt, relaxed.converged), relaxed.energy
 
 
@@ -99,7 +103,7 @@ class DampedDrape:
         return float(moved.mean()) < self.steady_mean and float(np.percentile(moved, 99)) < self.steady_p99
 
     def run(self, model: Model, state: State, first_step: int, energy: list[tuple[int, float]], on_save: Saver,
-            progress: bool) -> tuple[Settled, list[tuple[int, float]]]:
+            progress: bool, stop: Stop | None = None) -> tuple[Settled, list[tuple[int, float]]]:
         """As :meth:`KineticDrape.run`, the energy logged at each check against the step."""
         energy = list(energy)
         with relax_progress("draping", self.steps_planned(), progress) as on_log:
@@ -112,7 +116,7 @@ class DampedDrape:
                                       rest_speed=0.0, steady=self.steady, max_speed=self.max_speed,
                                       iterations=self.sweeps)
             settled = settle(model, SolverImplicit.name, settings, state=state, on_check=on_check,
-                             first_step=first_step)
+                             first_step=first_step, should_stop=stop)
         return settled, energy
 
 

@@ -146,7 +146,7 @@ class SewingStage:
 
 def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings = SewingSettings(), *,
         device: str | None = None, progress: bool = False, resume: SewingStage | None = None,
-        on_stage: Callable[[SewingStage], None] | None = None) -> Sewn:
+        on_stage: Callable[[SewingStage], None] | None = None, stop: Callable[[], bool] | None = None) -> Sewn:
     """Place ``garment`` around ``body``, sew it closed and return the sewn garment.
 
     Three relaxations, all with the paper's explicit steps:
@@ -166,6 +166,10 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
     (:class:`SewingStage`), and a sewing given one as ``resume`` goes on after it. Each stage
     and round starts from the positions the last one left, at rest, so a resumed sewing goes on
     as it would have, but for the memory of the settling's collision searches and crossing guard.
+
+    ``stop()`` true (the drape's time is up) ends the first stage's and the settling's rounds
+    where they are; the closing, the first settling round and the settling of what the
+    untangling moved always run, so that a garment comes out joined.
     """
     net, node_map = garment.sewn()
     pairs = sewing_pairs(node_map)
@@ -180,11 +184,12 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
                                   momentum=settings.momentum)
         iterations = settings.max_iterations
         for round_ in range(settings.rounds):
-            if round_ and (result.converged or _pair_gaps(state.positions(), pairs).max(initial=0.0) <= settings.open_gap):
+            if round_ and (result.converged or _pair_gaps(state.positions(), pairs).max(initial=0.0) <= settings.open_gap
+                           or (stop is not None and stop())):
                 break
             with relax_progress("sewing" if round_ == 0 else "sewing on", iterations, progress) as on_log:
                 more = sewing.relax(state, dt, max_iterations=iterations, min_iterations=min(400, iterations),
-                                    on_log=on_log)
+                                    on_log=on_log, should_stop=stop)
             result.extend(more)
         points = _finite(state.positions())
         stage = _reached(on_stage, SewingStage("sewn", points, dt, result))
@@ -228,7 +233,8 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
         count, total = _overstretched(joined, state.positions(), settings.overstretched)
         overstretched.append(count)
         excess.append(total)
-        if round_ and (count == 0 or (len(excess) > 1 and total > (1.0 - settings.settling_progress) * excess[-2])):
+        if round_ and (count == 0 or (len(excess) > 1 and total > (1.0 - settings.settling_progress) * excess[-2])
+                       or (stop is not None and stop())):
             break
         with relax_progress("settling seams" if round_ == 0 else "settling on", settle, progress) as on_log:
             more = settling.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),
@@ -236,7 +242,18 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
         tail.extend(more)
         _reached(on_stage, SewingStage("settling", _finite(state.positions()), dt, result, tail, list(overstretched),
                                        round_ + 1, seam_gaps, list(excess)))
-    points, _ = untangle(_finite(state.positions()), net.triangles, device=device)
+    settled = _finite(state.positions())
+    points, _ = untangle(settled, net.triangles, device=device)
+    if np.abs(points - settled).max(initial=0.0) > settings.closed_gap:
+        state.node_q.assign(points.astype(np.float32))
+        state.node_qd.zero_()
+        guarded = StaticRelaxation(joined, collision=replace(presets.SETTLING, crossing_guard=True,
+                                                             guard_every=presets.guard_every(settling_dt)),
+                                   max_speed=settings.settling_speed)
+        with relax_progress("settling the untangled", settle, progress) as on_log:
+            tail.extend(guarded.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),
+                                      on_log=on_log))
+        points = _finite(state.positions())
     return Sewn(garment, net, node_map, points, seam_gaps, result, tail, dt)
 
 

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+import shapely.ops
 from scipy.spatial import Delaunay
 
 from ..errors import InvalidInput
@@ -159,6 +160,8 @@ def _thread_crossings(edge, to_grain: np.ndarray, offset: np.ndarray, spacing: f
 
 def _clipped_delaunay(xy: np.ndarray, outline: shapely.Polygon, ring_count: int, name: str) -> np.ndarray:
     tri = Delaunay(xy).simplices
+    for k in range(ring_count):
+        tri = _recover_segment(xy, tri, k, (k + 1) % ring_count)
     p = xy[tri]
     probes = np.concatenate([p.mean(axis=1), 0.5 * (p[:, [0, 1, 2]] + p[:, [1, 2, 0]]).reshape(-1, 2)])
     region = outline.buffer(1e-9)
@@ -180,6 +183,32 @@ def _clipped_delaunay(xy: np.ndarray, outline: shapely.Polygon, ring_count: int,
     if not used.all():
         raise InvalidInput(f"panel {name!r}: a node was left out of the mesh; use a finer spacing")
     return tri.astype(np.int32)
+
+
+def _recover_segment(xy: np.ndarray, tri: np.ndarray, a: int, b: int) -> np.ndarray:
+    """``tri`` with the outline segment ``a``-``b`` made a triangle side where it is not one (a
+    node of the outline too near it, such as a dart's point near the panel's edge, took it out of
+    the Delaunay triangulation): the triangles it passes through are taken out and the hole on
+    each side of it triangulated again, constrained to its boundary (Anglada's insertion of a
+    segment into a Delaunay triangulation)."""
+    sides = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    if ((sides[:, 0] == min(a, b)) & (sides[:, 1] == max(a, b))).any():
+        return tri
+    segment = shapely.LineString(xy[[a, b]])
+    polygons = shapely.polygons(xy[tri])
+    crossed = shapely.relate_pattern(polygons, segment, "T********")
+    if not crossed.any():
+        return tri
+    hole = shapely.unary_union(polygons[crossed])
+    index = {tuple(np.round(q, 12)): i for i, q in enumerate(xy)}
+    refilled = []
+    for piece in shapely.get_parts(shapely.ops.split(hole, segment)):
+        for t in shapely.get_parts(shapely.constrained_delaunay_triangles(piece)):
+            corners = [index.get(tuple(np.round(q, 12))) for q in shapely.get_coordinates(t)[:3]]
+            if None in corners:
+                return tri
+            refilled.append(corners)
+    return np.vstack([tri[~crossed], np.asarray(refilled, tri.dtype).reshape(-1, 3)])
 
 
 def _elements(uv, triangles, is_grid, ij):

@@ -1,6 +1,6 @@
 """Output folders: party writes only where it may, replaces only what it wrote, one run at a time.
 
-Every command that writes results (``party drape``, ``run``, ``validate``) holds its ``--out``
+Every command that writes results (``party drape``, ``run``, ``validate``, ``batch``) holds its ``--out``
 folder through :func:`open_output` for the whole run:
 
 - ``--out`` must name a folder of its own: the current folder, a folder above it, the home
@@ -45,6 +45,7 @@ OUTPUTS: dict[str, tuple[str, ...]] = {
               "summary.json", "checkpoint.npz"),
     "run": ("frames", "colliders", "images", "relaxation.json", "summary.json", "checkpoint.npz", "sewn.npz"),
     "validate": ("results.json", "*.png"),
+    "batch": ("*__*__*", "manifest.parquet", "contact_sheet.png", "logs"),
 }
 """Top-level entries (file-name patterns) each command writes into its output folder."""
 

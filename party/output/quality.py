@@ -45,4 +45,6 @@ def drape_quality(summary: dict, thickness: float) -> dict:
         reasons.append(f"stretched to {summary['max_elongation']:.2f} times rest (at most {MAX_ELONGATION})")
     if not summary["relaxation"]["at_rest"]:
         reasons.append("not at rest")
+    if summary["timed_out"]:
+        reasons.append(f"ran past its time limit of {summary['time_limit_s']:g} s and was stopped there")
     return {"passed": not reasons, "reasons": reasons}

@@ -20,9 +20,15 @@ PARTS = ("front", "back", "left_sleeve", "right_sleeve", "left_leg", "right_leg"
 ANCHORS = ("neck", "shoulder", "bust", "waist", "hip")
 """Body heights the top of an automatically placed torso panel can be put at."""
 
-SEAM_LENGTH_RATIO = 1.5
-"""Largest ratio of the two edge lengths of one seam; beyond it the seam is taken as an error
-(easing a sleeve cap into an armhole stays well below it)."""
+GATHER_LIMIT = 4.0
+"""Largest ratio of the two edge lengths of one seam. A seam whose sides differ is sewn with the
+longer side gathered evenly onto the shorter (a sleeve into a cuff, a skirt into a waistband:
+GarmentCode's designs gather up to about 3 to 1); beyond 4 to 1 no garment gathers, and the
+seam is taken as an error."""
+
+GATHER_SLACK = 0.005
+"""Length [m] by which two sides of a seam may differ whatever their ratio: sides of a few
+millimetres (a pattern's rounding at a corner) differ in ratio by chance."""
 
 
 @dataclass(frozen=True)
@@ -158,9 +164,10 @@ class Pattern:
                     raise InvalidInput(f"{seam}: edge {ref} is already sewn in {used[ref]}")
                 used[ref] = seam
             la, lb = self.edge(seam.a).length(), self.edge(seam.b).length()
-            if max(la, lb) > SEAM_LENGTH_RATIO * min(la, lb):
-                raise InvalidInput(f"{seam}: edge lengths {la * 100:.1f} cm and {lb * 100:.1f} cm differ by more "
-                                   f"than a factor {SEAM_LENGTH_RATIO}")
+            if max(la, lb) > GATHER_LIMIT * min(la, lb) + GATHER_SLACK:
+                raise InvalidInput(f"{seam}: edge lengths {la * 100:.1f} cm and {lb * 100:.1f} cm would gather "
+                                   f"{max(la, lb) / max(min(la, lb), 1e-9):.1f} to 1, beyond the "
+                                   f"{GATHER_LIMIT:g} to 1 a garment gathers")
 
     def edge(self, ref: EdgeRef) -> Edge:
         return self.panels[ref.panel].edges[ref.edge]

@@ -20,15 +20,19 @@ each other at once. Output layout::
                                        relaxation (sewing iterations, draping steps and
                                        simulated seconds, at_rest, final energy [J]),
                                        quality (passed, reasons: :mod:`party.output.quality`),
+                                       time_limit_s, timed_out,
                                        wall_seconds (resumed drapes: all runs')
     OUT/checkpoint.npz                 while it runs: the sewing after each of its stages,
                                        the sewn garment, then the draping state,
                                        which ``resume`` goes on from (:mod:`.drape_checkpoint`);
-                                       gone once the drape finishes
+                                       gone once the drape finishes, kept where
+                                       it stopped at its time limit
 """
 
 from __future__ import annotations
 
+import math
+import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -37,7 +41,7 @@ import numpy as np
 
 from ..body.load import load_body
 from ..body.probe import ColliderProbe
-from ..errors import SimulationUnstable
+from ..errors import InvalidInput, SimulationUnstable
 from ..fabric import Fabric
 from ..garment.assemble import assemble
 from ..garment.checks import check_placement, estimate_nodes
@@ -72,6 +76,10 @@ class DrapeSettings:
         resume: Go on from the output folder's checkpoint.
         overwrite: Write into an output folder that holds files party did not write.
         checkpoint_seconds: Least wall time [s] between two checkpoints while draping.
+        time_limit: Wall time [s] a drape may take, all its runs together: past it the sewing
+            finishes what it must to join the garment and the draping stops where it is; the
+            result is written, its checkpoint kept (a resume with a larger limit goes on), and
+            its quality gate says so. GarmentCode's own allowance per garment is 600 s.
     """
 
     spacing: float = 0.02
@@ -87,9 +95,12 @@ class DrapeSettings:
     resume: bool = False
     overwrite: bool = False
     checkpoint_seconds: float = SAVE_SECONDS
+    time_limit: float = 600.0
 
     def __post_init__(self) -> None:
         check_solver(self.solver)
+        if not (math.isfinite(self.time_limit) and self.time_limit > 0):
+            raise InvalidInput(f"--time-limit must be a positive number of seconds, got {self.time_limit:g}")
 
 
 def drape(pattern: Path, body: str, fabric: Fabric, out: Path, settings: DrapeSettings = DrapeSettings(), *,
@@ -125,7 +136,12 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, settings: DrapeSe
                                      on_save=on_save)
         saved = checkpoint.load() if settings.resume else None
         wall = checkpoint.wall_clock(saved, started)
-        sewn = checkpoint.sew(saved, wall, garment, the_body, fabric, settings.sewing, device=device, progress=progress)
+
+        def time_is_up() -> bool:
+            return wall() > settings.time_limit
+
+        sewn = checkpoint.sew(saved, wall, garment, the_body, fabric, settings.sewing, device=device, progress=progress,
+                              stop=time_is_up)
         model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)
         state = model.state()
         first_step, energy = restore_draping(state, saved)
@@ -133,13 +149,18 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, settings: DrapeSe
         def save(step: int, log: list, state: State) -> None:
             checkpoint.save_draping(state, step, log, wall())
 
-        draped, energy = DRAPING[settings.solver].run(model, state, first_step, energy, save, progress)
+        draped, energy = DRAPING[settings.solver].run(model, state, first_step, energy, save, progress,
+                                                      stop=time_is_up)
         points = draped.state.positions()
         if not np.all(np.isfinite(points)):
             raise SimulationUnstable("draping blew up (non-finite positions); try a coarser --spacing")
+        timed_out = time_is_up()
         summary = _summary(pattern, body, fabric, settings, the_pattern, the_body, garment, sewn, model, points,
-                           draped, energy)
+                           draped, energy, timed_out)
         staging = folder.staging()
+        if timed_out:
+            checkpoint.save_draping(draped.state, draped.steps, energy, wall(), now=True)
+            os.replace(checkpoint.path, staging / checkpoint.path.name)
         in_file = the_body.to_file_frame
         write_garment(staging, "garment", in_file(points), model.triangles, garment.triangle_panel(), garment.corner_xy)
         for c in the_body.colliders:
@@ -156,7 +177,7 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, settings: DrapeSe
 
 
 def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern, the_body, garment, sewn, model,
-             points: np.ndarray, draped, energy: list) -> dict:
+             points: np.ndarray, draped, energy: list, timed_out: bool) -> dict:
     """The drape's ``summary.json`` (see the module docstring), its quality gates included
     (:func:`party.output.quality.drape_quality`)."""
     host = model.host
@@ -184,6 +205,8 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
             "final_energy_J": energy[-1][1] if energy else float("nan"),
         },
         "mesh_quality": garment.quality(),
+        "time_limit_s": settings.time_limit,
+        "timed_out": timed_out,
     }
     summary["quality"] = drape_quality(summary, fabric.thickness)
     return summary

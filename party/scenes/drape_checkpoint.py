@@ -144,10 +144,11 @@ class DrapeCheckpoint:
         self._write(**self._sewn)
         self._said("garment", 0)
 
-    def save_draping(self, state: State, step: int, energy: list, wall_seconds: float) -> None:
+    def save_draping(self, state: State, step: int, energy: list, wall_seconds: float, *, now: bool = False) -> None:
         """Save the draping ``state`` after ``step`` steps (iterations) with its ``energy`` log
-        [(step, J)], ``wall_seconds`` [s] into the drape; at most every ``save_every``."""
-        if time.perf_counter() - self._saved_at < self.save_every:
+        [(step, J)], ``wall_seconds`` [s] into the drape; at most every ``save_every``, unless
+        ``now``."""
+        if not now and time.perf_counter() - self._saved_at < self.save_every:
             return
         self._write(**{**self._sewn, "wall_seconds": wall_seconds}, node_q=state.positions(),
                     node_qd=state.velocities(), draping_step=step,

@@ -15,6 +15,7 @@ fewer iterations.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -95,11 +96,12 @@ class StaticRelaxation:
 
     def relax(self, state: State, dt: float, *, max_iterations: int = 20000, min_iterations: int = 200,
               log_every: int = 50, tolerance: float = 2e-3, window: int = 6, on_log=None,
-              resumed: RelaxResult | None = None) -> RelaxResult:
+              resumed: RelaxResult | None = None, should_stop: Callable[[], bool] | None = None) -> RelaxResult:
         """Iterate ``state`` in place until the energy changes by less than ``tolerance`` (relative)
         over ``window`` logs, or ``max_iterations``. ``on_log(iteration, energy, state)`` is called
         at each log (for progress bars and partial output). ``resumed``: the log of this
-        relaxation until it stopped, ``state`` holding where it was; it goes on from there."""
+        relaxation until it stopped, ``state`` holding where it was; it goes on from there.
+        ``should_stop()``, asked at each log, ends it there (not converged) when true."""
         control = self.model.control()
         scratch = self.model.state()
         result = RelaxResult(resumed.iterations, list(resumed.energy)) if resumed else RelaxResult()
@@ -113,7 +115,7 @@ class StaticRelaxation:
                 result.energy.append((it, energy))
                 if on_log is not None:
                     on_log(it, energy, current)
-                if not np.isfinite(energy):
+                if not np.isfinite(energy) or (should_stop is not None and should_stop()):
                     break
                 if it >= min_iterations and len(result.energy) > window:
                     old = result.energy[-1 - window][1]

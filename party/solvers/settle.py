@@ -83,7 +83,8 @@ class SettleSettings:
 
 
 def settle(model: Model, solver: str, settings: SettleSettings = SettleSettings(), *, state: State | None = None,
-           on_check: Callable[[int, State], None] | None = None, first_step: int = 0) -> Settled:
+           on_check: Callable[[int, State], None] | None = None, first_step: int = 0,
+           should_stop: Callable[[], bool] | None = None) -> Settled:
     """Bring ``model`` to static equilibrium from ``state`` (default: its set-up state) with the
     solver called ``solver``, as ``settings`` say. Raises :class:`SimulationUnstable` on
     blow-up; returns with ``at_rest`` False when its time is up first. ``on_check(step,
@@ -91,7 +92,7 @@ def settle(model: Model, solver: str, settings: SettleSettings = SettleSettings(
     that stopped after that many steps, ``state`` then holding where it was (the solver's own
     memory starts afresh); the time limit counts them. The solver runs as for a static run
     (``static``: the implicit one takes no contact re-solves, a settling being judged by its
-    rest shape)."""
+    rest shape). ``should_stop()``, asked at every check, ends it there (not at rest) when true."""
     collision, rest_speed, memory = settings.collision, settings.rest_speed, settings.memory
     check_every, max_seconds, steady = settings.check_every, settings.max_seconds, settings.steady
     dt, max_speed, iterations = settings.dt, settings.max_speed, settings.iterations
@@ -125,4 +126,6 @@ def settle(model: Model, solver: str, settings: SettleSettings = SettleSettings(
             quiet = quiet + 1 if still else 0
             if quiet >= 2:
                 return Settled(state, it, it * dt, True)
+            if should_stop is not None and should_stop():
+                return Settled(state, it, it * dt, False)
     return Settled(state, steps, steps * dt, False)
