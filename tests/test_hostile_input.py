@@ -298,11 +298,13 @@ def test_a_garment_that_ends_off_the_body_fails_its_quality_gate_loudly(tmp_path
 def test_the_quality_gates_name_each_miss():
     from party.output.quality import drape_quality
 
-    good = {"body_distance_mm": {"nearest": 3.0, "median": 44.0}, "body_penetrations": 0, "cloth_crossings": 0,
+    good = {"body_distance_mm": {"nearest": 3.0, "median": 44.0, "near_share": 0.6}, "body_penetrations": 0, "cloth_crossings": 0,
             "max_seam_gap_mm": 0.5, "seam_gaps_mm": {"a-b": 0.5}, "max_elongation": 1.1, "relaxation": {"at_rest": True},
             "time_limit_s": 600.0, "timed_out": False}
     assert drape_quality(good, 3e-3) == {"passed": True, "reasons": []}
-    bad = {"body_distance_mm": {"nearest": 3.0, "median": 526.0}, "body_penetrations": 2, "cloth_crossings": 1, "max_seam_gap_mm": 450.0,
+    full_skirt = dict(good, body_distance_mm={"nearest": 3.0, "median": 206.0, "near_share": 0.21})
+    assert drape_quality(full_skirt, 3e-3) == {"passed": True, "reasons": []}
+    bad = {"body_distance_mm": {"nearest": 3.0, "median": 526.0, "near_share": 0.03}, "body_penetrations": 2, "cloth_crossings": 1, "max_seam_gap_mm": 450.0,
            "seam_gaps_mm": {"a-b": 0.5, "c-d": 450.0}, "max_elongation": 6.2, "relaxation": {"at_rest": False},
            "time_limit_s": 30.0, "timed_out": True}
     assert drape_quality(bad, 3e-3)["reasons"] == ["not on the body: half its nodes are more than 526 mm from it",

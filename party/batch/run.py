@@ -103,7 +103,7 @@ def _local(items: list[BatchItem], dataset: Path, settings: BatchSettings) -> It
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
                 for future in done:
                     item = running.pop(future)
-                    yield item, future.result()
+                    yield item, _row(item, future)
                     following = next(queue, None)
                     if following is not None:
                         running[pool.submit(run_item, following, dataset, options)] = following
@@ -112,6 +112,23 @@ def _local(items: list[BatchItem], dataset: Path, settings: BatchSettings) -> It
                 future.cancel()
             wait(running)
             raise KeyboardInterrupt from None
+
+
+def _row(item: BatchItem, future) -> dict:
+    """The row an item's future holds; an error row where the batch itself could not run it (a
+    full disk for its log, say), so that one item's trouble never ends the batch."""
+    try:
+        return future.result()
+    except (Interrupted, KeyboardInterrupt):
+        raise
+    except Exception as error:
+        return error_row(item, f"the batch could not run it ({type(error).__name__}: {error})")
+
+
+def error_row(item: BatchItem, reason: str) -> dict:
+    """A manifest row of an item that ended in error for ``reason``."""
+    return {"item": item.name, "pattern": str(item.pattern), "body": item.body, "fabric": item.fabric,
+            "status": "error", "reasons": [reason]}
 
 
 def _ray(items: list[BatchItem], dataset: Path, settings: BatchSettings) -> Iterator[tuple[BatchItem, dict]]:
@@ -143,8 +160,7 @@ def _ray(items: list[BatchItem], dataset: Path, settings: BatchSettings) -> Iter
                 try:
                     row = ray.get(ref)
                 except ray.exceptions.RayError as error:
-                    row = {"item": item.name, "pattern": str(item.pattern), "body": item.body, "fabric": item.fabric,
-                           "status": "error", "reasons": [f"its Ray task failed ({type(error).__name__})"]}
+                    row = error_row(item, f"its Ray task failed ({type(error).__name__})")
                 yield item, row
     except KeyboardInterrupt:
         for ref in pending:

@@ -11,7 +11,8 @@ each other at once. Output layout::
     OUT/images/front.png, side.png, back.png, energy.png
     OUT/relaxation.json                energy logs of sewing and draping
     OUT/summary.json                   nodes, seams, max seam gap [mm], body_penetrations,
-                                       body_distance_mm (nearest, median),
+                                       body_distance_mm (nearest, median,
+                                       near_share: the share within 50 mm),
                                        body_vertices_through_cloth, cloth_crossings,
                                        max_elongation (draped) and
                                        max_sewn_elongation (as sewn; above the fabric's
@@ -53,7 +54,7 @@ from ..output.folder import check_output_path, open_output
 from ..output.frames import write_json, write_mesh
 from ..output.garment_export import write_garment
 from ..output.metrics import body_vertices_through, cloth_crossings, elements_beyond_limit, max_elongation
-from ..output.quality import drape_quality
+from ..output.quality import NEAR_MM, drape_quality
 from ..pattern import load_pattern
 from ..resources import DRAPE_FOOTPRINT, check_memory
 from ..solvers.registry import check_solver
@@ -192,7 +193,8 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
         "seam_gaps_mm": {f"{s.a}-{s.b}": round(1000.0 * g, 3) for s, g in zip(the_pattern.seams, sewn.seam_gaps)},
         "body_penetrations": int(inside.sum()),
         "body_distance_mm": {"nearest": round(1000.0 * float(distance.min()), 3),
-                             "median": round(1000.0 * float(np.median(distance)), 3)},
+                             "median": round(1000.0 * float(np.median(distance)), 3),
+                             "near_share": round(float((distance < NEAR_MM / 1000.0).mean()), 4)},
         "cloth_crossings": cloth_crossings(points, model.triangles, model.device),
         "body_vertices_through_cloth": body_vertices_through(points, model.triangles, the_body.colliders,
                                                              device=model.device),
