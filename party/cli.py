@@ -197,6 +197,7 @@ def batch_command(
     from .batch import BatchSettings, plan, run_batch
     from .batch.report import contact_sheet, tally
     from .batch.worker import ItemOptions
+    from .body.load import load_body
     from .fabric import fabric_by_name
     from .output.folder import check_output_path, open_output
     from .solvers.registry import check_solver
@@ -207,6 +208,8 @@ def batch_command(
     items = plan(patterns, [b.strip() for b in bodies.split(",")], [f.strip() for f in fabrics.split(",")])
     for name in dict.fromkeys(i.fabric for i in items):
         fabric_by_name(name)
+    for name in dict.fromkeys(i.body for i in items):
+        load_body(name)
     settings = BatchSettings(workers=workers, ray=ray, resume=resume,
                              item=ItemOptions(spacing_mm=spacing_mm, solver=check_solver(solver), time_limit=time_limit,
                                               images=images, device=device))

@@ -156,3 +156,21 @@ def test_a_batch_on_ray_writes_the_results_of_a_local_one(tmp_path):
     assert status == 0, err
     assert stable(manifest(on_ray)) == stable(manifest(local))
     assert (on_ray / "tee__mean_all__wool_flannel" / "garment.obj").exists()
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--bodies", "M,nobody.obj", "error: nobody.obj: body file not found (presets: S, M, L)"),
+    ("--fabrics", "silk,velvet", "error: unknown fabric 'velvet'; known: cotton, denim, knit_jersey, silk, wool_flannel, "
+                                 "or a .toml/.json file"),
+    ("--workers", "0", "error: --workers must be at least 1, got 0"),
+    ("--time-limit", "-5", "error: --time-limit must be a positive number of seconds, got -5"),
+])
+def test_a_batch_refuses_a_bad_body_fabric_or_setting_before_any_item_runs(tmp_path, option, value, message):
+    pattern = tmp_path / "skirt.json"
+    pattern.write_text("{}")
+    out = tmp_path / "dataset"
+    command = [sys.executable, "-m", "party.cli", "batch", str(pattern), "--out", str(out), option, value]
+    done = subprocess.run(command, capture_output=True, text=True)
+    assert done.returncode == 1
+    assert done.stderr.strip() == message
+    assert not out.exists()

@@ -54,7 +54,7 @@ class BatchSettings:
         if self.threads is not None and self.threads < 1:
             raise InvalidInput(f"threads per worker must be at least 1, got {self.threads}")
         if not self.item.time_limit > 0:
-            raise InvalidInput(f"--time-limit must be a positive number of seconds, got {self.item.time_limit}")
+            raise InvalidInput(f"--time-limit must be a positive number of seconds, got {self.item.time_limit:g}")
 
     def local_pool(self) -> tuple[int, int]:
         """(workers, threads per worker) of a local run."""

@@ -8,7 +8,8 @@ its rest. So the gathered panel is shirred: each element near the seam rests sho
 seam's direction, by the seam's ratio at the seam and less with distance from it, back to its
 own length at :data:`GATHER_DEPTH` of the length the gather takes up. The cloth rests as the
 puff that gathers make (a sleeve gathered into a cuff, a skirt into a waistband); its mass and
-its length across the seam are the flat panel's.
+its length across the seam are the flat panel's. Sides that differ by less than :data:`EASED`
+are eased, not gathered, and keep their rest lengths.
 """
 
 from __future__ import annotations
@@ -18,6 +19,11 @@ import shapely
 
 from ..meshing.panel_mesh import PanelMesh
 from ..pattern.pattern import Pattern
+
+EASED = 1.1
+"""A side up to this much longer than the other is eased in, not gathered (a sleeve cap into its
+armhole, a bodice into a waist seam, by a few percent): the cloth takes that in its own plane,
+as wool steamed into a sleeve cap does, so its rest lengths stay those of the flat panel."""
 
 GATHER_DEPTH = 0.5
 """How far from a gathered seam its shirring reaches, as a fraction of the length the gather
@@ -33,7 +39,7 @@ def gathered_rest_lengths(pattern: Pattern, meshes: tuple[PanelMesh, ...], offse
     index = {name: k for k, name in enumerate(pattern.panels)}
     for seam in pattern.seams:
         la, lb = pattern.edge(seam.a).length(), pattern.edge(seam.b).length()
-        if la == lb:
+        if max(la, lb) < EASED * min(la, lb):
             continue
         longer = seam.a if la > lb else seam.b
         ratio = max(la, lb) / min(la, lb)
