@@ -34,7 +34,8 @@ class BatchSettings:
     """How a batch runs.
 
     Attributes:
-        workers: Items draped at once (None: one per core, or the Ray cluster's CPUs).
+        workers: Items draped at once (None: one per core; with Ray, as many as the cluster's
+            CPUs take).
         threads: Kernel threads of each item (None: the cores shared among the local workers;
             one with Ray).
         ray: A Ray cluster's address, or "auto"; None runs locally.
@@ -151,12 +152,22 @@ def _ray(items: list[BatchItem], dataset: Path, settings: BatchSettings) -> Iter
     threads = settings.threads or 1
     options = _with_threads(settings.item, threads)
     task = ray.remote(num_cpus=threads, max_retries=0)(run_item)
-    pending = {task.remote(item, dataset, options): item for item in items}
+    queue = iter(items)
+    pending = {}
+
+    def submit() -> None:
+        following = next(queue, None)
+        if following is not None:
+            pending[task.remote(following, dataset, options)] = following
+
+    for _ in range(settings.workers or len(items)):
+        submit()
     try:
         while pending:
             done, _ = ray.wait(list(pending), num_returns=1)
             for ref in done:
                 item = pending.pop(ref)
+                submit()
                 try:
                     row = ray.get(ref)
                 except ray.exceptions.RayError as error:
