@@ -9,15 +9,12 @@ from typing import Optional
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
-from .errors import InvalidInput, PartyError
+from .errors import INTERRUPTED, InvalidInput, PartyError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
                   help="PARTY dress simulator: the paper's experiments and garment draping.")
 err = Console(stderr=True)
-INTERRUPTED = 130
-"""Exit status of a run stopped by Ctrl-C (SIGINT), as shells give it."""
 out = Console()
 
 OPEN_SEAM_MM = 1.0
@@ -195,6 +192,8 @@ def batch_command(
 ) -> None:
     """Drape every pattern on every body in every fabric into a dataset, unattended."""
     from .batch import BatchSettings, plan, run_batch
+    from rich.table import Table
+
     from .batch.report import contact_sheet, tally
     from .batch.worker import ItemOptions
     from .body.load import load_body

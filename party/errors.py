@@ -6,6 +6,10 @@ non-zero; library users catch ``PartyError``.
 """
 
 
+INTERRUPTED = 130
+"""Exit status of a run stopped by Ctrl-C (SIGINT), as shells give it."""
+
+
 class PartyError(ValueError):
     """Base class: a one-line, user-facing problem."""
 

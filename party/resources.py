@@ -93,3 +93,11 @@ def check_memory(footprint: Footprint, nodes: int, spacing: float, free: float |
     raise InvalidInput(f"about {nodes:,} nodes at --spacing-mm {spacing * 1000:g} would need about "
                        f"{needed / 1e9:.2g} GB of memory and this machine has {free / 1e9:.2g} GB free; use "
                        f"--spacing-mm {math.ceil(fits * 1000):g} or more")
+
+
+def check_time_limit(seconds: float) -> float:
+    """``seconds``, the wall time a drape may take, or :class:`InvalidInput` where it is not a
+    finite positive number."""
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise InvalidInput(f"--time-limit must be a positive number of seconds, got {seconds:g}")
+    return seconds

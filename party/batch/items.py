@@ -35,6 +35,10 @@ class BatchItem:
         pattern = self.pattern.stem.removesuffix(SPEC_SUFFIX)
         return f"{pattern}__{Path(self.body).stem}__{Path(self.fabric).stem}"
 
+    def columns(self) -> dict:
+        """The item's own manifest columns: its name and inputs."""
+        return {"item": self.name, "pattern": str(self.pattern), "body": self.body, "fabric": self.fabric}
+
 
 def pattern_files(given: list[str]) -> list[Path]:
     """The pattern files ``given`` names, in order, each once: files as they are, folders' pattern

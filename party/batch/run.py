@@ -24,6 +24,7 @@ from typing import Callable, Iterator
 
 from ..errors import InvalidInput
 from ..launch.threads import CORES
+from ..resources import check_time_limit
 from .items import BatchItem
 from .manifest import Manifest
 from .worker import Interrupted, ItemOptions, run_item
@@ -54,8 +55,7 @@ class BatchSettings:
             raise InvalidInput(f"--workers must be at least 1, got {self.workers}")
         if self.threads is not None and self.threads < 1:
             raise InvalidInput(f"threads per worker must be at least 1, got {self.threads}")
-        if not self.item.time_limit > 0:
-            raise InvalidInput(f"--time-limit must be a positive number of seconds, got {self.item.time_limit:g}")
+        check_time_limit(self.item.time_limit)
 
     def local_pool(self) -> tuple[int, int]:
         """(workers, threads per worker) of a local run."""
@@ -128,8 +128,7 @@ def _row(item: BatchItem, future) -> dict:
 
 def error_row(item: BatchItem, reason: str) -> dict:
     """A manifest row of an item that ended in error for ``reason``."""
-    return {"item": item.name, "pattern": str(item.pattern), "body": item.body, "fabric": item.fabric,
-            "status": "error", "reasons": [reason]}
+    return item.columns() | {"status": "error", "reasons": [reason]}
 
 
 def _ray(items: list[BatchItem], dataset: Path, settings: BatchSettings) -> Iterator[tuple[BatchItem, dict]]:

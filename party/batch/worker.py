@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..errors import INTERRUPTED
 from .items import BatchItem
 
 GRACE = 1.5
@@ -25,10 +26,6 @@ and is killed: it stops itself at its limit, and writing its results takes secon
 
 GRACE_SECONDS = 120.0
 """See :data:`GRACE` [s]."""
-
-INTERRUPTED = 130
-"""Exit status of a drape stopped by Ctrl-C: the item is not done, and the batch stops."""
-
 
 @dataclass(frozen=True)
 class ItemOptions:
@@ -87,9 +84,8 @@ def run_item(item: BatchItem, dataset: Path, options: ItemOptions) -> dict:
             process.wait()
             raise
     wall = time.perf_counter() - started
-    row = {"item": item.name, "pattern": str(item.pattern), "body": item.body, "fabric": item.fabric,
-           "wall_seconds": round(wall, 2)}
-    if code == INTERRUPTED:
+    row = item.columns() | {"wall_seconds": round(wall, 2)}
+    if code == INTERRUPTED:  # stopped by Ctrl-C: not done, and the batch stops
         raise Interrupted(item.name)
     if hung:
         return row | {"status": "timeout", "reasons": [f"still running {wall:.0f} s after it started; killed"]}

@@ -35,6 +35,13 @@ def guarded(dt: float, *, body_vertices: bool = False) -> CollisionSettings:
     return CollisionSettings(crossing_guard=True, guard_every=guard_every(dt), body_vertices=body_vertices)
 
 
+def settling_guarded(dt: float) -> CollisionSettings:
+    """:data:`SETTLING` with the crossing guard checking every :data:`GUARD_INTERVAL` of steps of
+    ``dt`` [s]: the sewn garment settling after its crossings were untangled, which must not
+    make them again while its plastic limit pulls back what the untangling stretched."""
+    return replace(SETTLING, crossing_guard=True, guard_every=guard_every(dt))
+
+
 def large_step(collision: CollisionSettings | None) -> CollisionSettings | None:
     """``collision`` for the implicit solver's large steps: with the crossing guard on, since
     they let more edges slip through each other, cloth triangles answering body vertices

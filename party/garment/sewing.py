@@ -247,8 +247,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
     if np.abs(points - settled).max(initial=0.0) > settings.closed_gap:
         state.node_q.assign(points.astype(np.float32))
         state.node_qd.zero_()
-        guarded = StaticRelaxation(joined, collision=replace(presets.SETTLING, crossing_guard=True,
-                                                             guard_every=presets.guard_every(settling_dt)),
+        guarded = StaticRelaxation(joined, collision=presets.settling_guarded(settling_dt),
                                    max_speed=settings.settling_speed)
         with relax_progress("settling the untangled", settle, progress) as on_log:
             tail.extend(guarded.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),

@@ -160,7 +160,7 @@ def _thread_crossings(edge, to_grain: np.ndarray, offset: np.ndarray, spacing: f
 
 def _clipped_delaunay(xy: np.ndarray, outline: shapely.Polygon, ring_count: int, name: str) -> np.ndarray:
     tri = Delaunay(xy).simplices
-    for k in range(ring_count):
+    for k in _missing_outline_sides(tri, ring_count):
         tri = _recover_segment(xy, tri, k, (k + 1) % ring_count)
     p = xy[tri]
     probes = np.concatenate([p.mean(axis=1), 0.5 * (p[:, [0, 1, 2]] + p[:, [1, 2, 0]]).reshape(-1, 2)])
@@ -173,8 +173,7 @@ def _clipped_delaunay(xy: np.ndarray, outline: shapely.Polygon, ring_count: int,
     tri = np.where((cross < 0)[:, None], tri[:, [0, 2, 1]], tri)
     tri = tri[np.abs(cross) > 1e-14]
     # Every outline segment must be a triangle side, else the net has a notch or a bridge.
-    sides = {tuple(sorted(s)) for t in tri.tolist() for s in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
-    missing = [k for k in range(ring_count) if tuple(sorted((k, (k + 1) % ring_count))) not in sides]
+    missing = _missing_outline_sides(tri, ring_count)
     if missing:
         raise InvalidInput(f"panel {name!r}: could not mesh its outline near ({xy[missing[0], 0]:.3f}, "
                            f"{xy[missing[0], 1]:.3f}) m; use a finer spacing")
@@ -185,15 +184,20 @@ def _clipped_delaunay(xy: np.ndarray, outline: shapely.Polygon, ring_count: int,
     return tri.astype(np.int32)
 
 
+def _missing_outline_sides(tri: np.ndarray, ring_count: int) -> list[int]:
+    """Each k whose outline segment k-(k+1) (the ring's first ``ring_count`` nodes) is no side of
+    a triangle of ``tri``."""
+    sides = {tuple(sorted(s)) for t in tri.tolist() for s in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+    return [k for k in range(ring_count) if tuple(sorted((k, (k + 1) % ring_count))) not in sides]
+
+
 def _recover_segment(xy: np.ndarray, tri: np.ndarray, a: int, b: int) -> np.ndarray:
-    """``tri`` with the outline segment ``a``-``b`` made a triangle side where it is not one (a
-    node of the outline too near it, such as a dart's point near the panel's edge, took it out of
-    the Delaunay triangulation): the triangles it passes through are taken out and the hole on
-    each side of it triangulated again, constrained to its boundary (Anglada's insertion of a
-    segment into a Delaunay triangulation)."""
-    sides = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
-    if ((sides[:, 0] == min(a, b)) & (sides[:, 1] == max(a, b))).any():
-        return tri
+    """``tri`` with the outline segment ``a``-``b``, no side of its triangles (a node of the
+    outline too near it, such as a dart's point near the panel's edge, took it out of the
+    Delaunay triangulation), made one: the triangles it passes through are taken out and the
+    hole on each side of it triangulated again, constrained to its boundary (Anglada's insertion
+    of a segment into a Delaunay triangulation). A segment an earlier insertion made a side
+    crosses no triangle, and ``tri`` comes back as it was."""
     segment = shapely.LineString(xy[[a, b]])
     polygons = shapely.polygons(xy[tri])
     crossed = shapely.relate_pattern(polygons, segment, "T********")

@@ -32,7 +32,6 @@ each other at once. Output layout::
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from dataclasses import asdict, dataclass, field
@@ -42,7 +41,7 @@ import numpy as np
 
 from ..body.load import load_body
 from ..body.probe import ColliderProbe
-from ..errors import InvalidInput, SimulationUnstable
+from ..errors import SimulationUnstable
 from ..fabric import Fabric
 from ..garment.assemble import assemble
 from ..garment.checks import check_placement, estimate_nodes
@@ -56,7 +55,7 @@ from ..output.garment_export import write_garment
 from ..output.metrics import body_vertices_through, cloth_crossings, elements_beyond_limit, max_elongation
 from ..output.quality import NEAR_MM, drape_quality
 from ..pattern import load_pattern
-from ..resources import DRAPE_FOOTPRINT, check_memory
+from ..resources import DRAPE_FOOTPRINT, check_memory, check_time_limit
 from ..solvers.registry import check_solver
 from .drape_checkpoint import SAVE_SECONDS, DrapeCheckpoint, Saved, restore_draping
 
@@ -100,8 +99,7 @@ class DrapeSettings:
 
     def __post_init__(self) -> None:
         check_solver(self.solver)
-        if not (math.isfinite(self.time_limit) and self.time_limit > 0):
-            raise InvalidInput(f"--time-limit must be a positive number of seconds, got {self.time_limit:g}")
+        check_time_limit(self.time_limit)
 
 
 def drape(pattern: Path, body: str, fabric: Fabric, out: Path, settings: DrapeSettings = DrapeSettings(), *,
