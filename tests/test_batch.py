@@ -81,8 +81,12 @@ def test_two_patterns_that_would_share_a_folder_are_refused_in_one_line(tmp_path
 
 
 def test_reasons_of_one_kind_count_together():
-    assert reason_kind("seam a.edge[1]-b.edge[2] open 3.1 mm") == reason_kind("seam c.edge[0]-d.edge[5] open 12 mm")
-    assert reason_kind("stretched to 1.45 times rest (at most 1.3)") == "stretched to # times rest (at most #)"
+    assert (reason_kind("seam a.edge[1]-b.edge[2] left open 3.1 mm by the sewing")
+            == reason_kind("seam c.edge[0]-d.edge[5] left open 12 mm by the sewing"))
+    assert (reason_kind("stretched to 1.45 times rest (at most 1.3), in panel 'wb_front', since the sewing")
+            == "stretched to # times rest (at most #), in panel …, since the sewing")
+    assert (reason_kind("3 nodes inside the body, in panel 'skirt_f' and panel 'skirt_b', in the draping")
+            == reason_kind("40 nodes inside the body, in panel 'front', in the draping"))
 
 
 @needs_shared

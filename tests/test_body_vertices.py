@@ -138,13 +138,15 @@ def test_the_body_searched_again_only_where_a_node_left_its_region_misses_nothin
         unused = wp.zeros(n, dtype=int)
         wp.launch(gather_body_faces_bvh, dim=n, inputs=[0, x, v, model.node_inv_mass, model.node_thickness,
                                                         self.body_tree.id, dt, 0.0, 1, 0, wp.zeros(n, dtype=wp.vec3),
-                                                        wp.zeros(n, dtype=wp.vec3), unused, faces, face_count,
-                                                        overflow])
+                                                        wp.zeros(n, dtype=wp.vec3), unused,
+                                                        model.node_ignored_parts, model.collider_face_parts, faces,
+                                                        face_count, overflow])
         wp.launch(gather_body_vertices, dim=t, inputs=[0, x, v, model.node_thickness, model.triangle_nodes,
                                                        self._vertex_tree.id, self.tested_vertices, state.collider_q,
                                                        state.collider_qd, dt,
                                                        0.0, 1, 0, wp.zeros((t, 3), dtype=wp.vec3),
-                                                       wp.zeros((t, 3), dtype=wp.vec3), unused, vertices,
+                                                       wp.zeros((t, 3), dtype=wp.vec3), unused,
+                                                       model.node_ignored_parts, model.collider_vertex_parts, vertices,
                                                        vertex_count, distance, overflow])
         pairs = ((faces, face_count, self.body_faces, self.body_face_count),
                  (vertices, vertex_count, self.body_vertices, self.body_vertex_count))

@@ -306,11 +306,16 @@ def test_the_quality_gates_name_each_miss():
     assert drape_quality(full_skirt, 3e-3) == {"passed": True, "reasons": []}
     bad = {"body_distance_mm": {"nearest": 3.0, "median": 526.0, "near_share": 0.03}, "body_penetrations": 2, "cloth_crossings": 1, "max_seam_gap_mm": 450.0,
            "seam_gaps_mm": {"a-b": 0.5, "c-d": 450.0}, "max_elongation": 6.2, "relaxation": {"at_rest": False},
-           "time_limit_s": 30.0, "timed_out": True}
-    assert drape_quality(bad, 3e-3)["reasons"] == ["not on the body: half its nodes are more than 526 mm from it",
-                                                   "2 nodes inside the body", "1 cloth crossings",
-                                                   "seam c-d open 450.0 mm", "stretched to 6.20 times rest (at most 1.3)",
-                                                   "not at rest", "ran past its time limit of 30 s and was stopped there"]
+           "time_limit_s": 30.0, "timed_out": True,
+           "where": {"stretched": {"panels": ["band"], "stage": "sewing"},
+                     "inside": {"panels": ["skirt_f", "skirt_b"], "stage": "draping"},
+                     "crossings": {"panels": ["hood"], "stage": "sewing"}}}
+    assert drape_quality(bad, 3e-3)["reasons"] == [
+        "not on the body: half its nodes are more than 526 mm from it",
+        "2 nodes inside the body, in panel 'skirt_f' and panel 'skirt_b', in the draping",
+        "1 cloth crossings, in panel 'hood', since the sewing", "seam c-d left open 450.0 mm by the sewing",
+        "stretched to 6.20 times rest (at most 1.3), in panel 'band', since the sewing",
+        "not at rest at the end of the draping", "ran past its time limit of 30 s and was stopped there"]
 
 
 @pytest.mark.parametrize("change, differing", [

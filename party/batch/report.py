@@ -19,9 +19,10 @@ THUMBNAIL = 256
 
 def reason_kind(reason: str) -> str:
     """A reason with what differs between items (numbers, seams, panels, files) left out, to
-    count reasons of one kind together: "seam a.edge[1]-b.edge[2] open 3.1 mm" -> "seam … open # mm"."""
+    count reasons of one kind together: "seam a.edge[1]-b.edge[2] left open 3.1 mm by the sewing"
+    -> "seam … left open # mm by the sewing", "in panel 'a' and panel 'b'" -> "in panel …"."""
     kind = re.sub(r"\bseam \S+", "seam …", reason)
-    kind = re.sub(r"\bpanel '[^']*'", "panel …", kind)
+    kind = re.sub(r"\bpanel '[^']*'( and panel '[^']*')*", "panel …", kind)
     kind = re.sub(r"\S*/\S*", "…", kind)
     return re.sub(r"\d+(\.\d+)?(e[-+]?\d+)?", "#", kind)
 

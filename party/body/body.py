@@ -28,6 +28,8 @@ class Body:
             ``top``; ``shoulder_half_width`` [m] (centre to shoulder point).
         axis: (x, y) of the torso's vertical axis [m].
         to_source: Rotation (3, 3) taking our frame to the file's frame.
+        measurements: GarmentCode's measurements of the body where its file has them
+            (:mod:`party.body.measurements`: lengths [m], angles [deg]); empty otherwise.
     """
 
     name: str
@@ -35,6 +37,7 @@ class Body:
     landmarks: dict
     axis: tuple[float, float] = (0.0, 0.0)
     to_source: np.ndarray = field(default_factory=lambda: np.eye(3))
+    measurements: dict = field(default_factory=dict)
 
     def vertices(self) -> np.ndarray:
         return np.concatenate([c.vertices for c in self.colliders])

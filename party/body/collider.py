@@ -29,12 +29,15 @@ class ColliderMesh:
         velocity: Constant linear velocity of the whole mesh [m/s], shape (3,); the surface
             velocity enters the response of eq. (12). Moving meshes may also be driven per
             step through the State.
+        vertex_parts: Body-part bits of each vertex (:mod:`party.body.segmentation`), shape
+            (n,) int32, 0 in none; None for a collider without parts.
     """
 
     name: str
     vertices: np.ndarray
     faces: np.ndarray
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    vertex_parts: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         v = np.asarray(self.vertices, dtype=float)
@@ -50,6 +53,11 @@ class ColliderMesh:
             raise InvalidInput(f"collider {self.name!r} has non-finite vertex positions")
         if f.min() < 0 or f.max() >= len(v):
             raise InvalidInput(f"collider {self.name!r} has a face index out of range [0, {len(v)})")
+        if self.vertex_parts is not None:
+            parts = np.asarray(self.vertex_parts, np.int32)
+            if parts.shape != (len(v),):
+                raise InvalidInput(f"collider {self.name!r}: {parts.size} vertex part labels for {len(v)} vertices")
+            object.__setattr__(self, "vertex_parts", parts)
         self._check_manifold()
 
     def _check_manifold(self) -> None:
@@ -74,6 +82,17 @@ class ColliderMesh:
         if np.all(counts == 2) and self.signed_volume() < FLAT * area**1.5:
             raise InvalidInput(f"collider {self.name!r} encloses almost no volume ({1000.0 * self.signed_volume():.3g} "
                                f"litres inside {area:.3g} m^2 of surface): it is flat or folded onto itself")
+
+    def face_parts(self) -> np.ndarray:
+        """Body-part bits of each face, shape (t,) int32: the parts all three corners are in."""
+        if self.vertex_parts is None:
+            return np.zeros(len(self.faces), np.int32)
+        corners = self.vertex_parts[self.faces]
+        return corners[:, 0] & corners[:, 1] & corners[:, 2]
+
+    def part_bits(self) -> np.ndarray:
+        """:attr:`vertex_parts`, zeros for a collider without parts, shape (n,) int32."""
+        return np.zeros(len(self.vertices), np.int32) if self.vertex_parts is None else self.vertex_parts
 
     def face_normals_unnormalized(self) -> np.ndarray:
         p = self.vertices[self.faces]
@@ -141,7 +160,8 @@ class ColliderMesh:
         return np.where(sharp[:, :, None], fn[:, None, :], corner), sharp
 
     def translated(self, offset) -> "ColliderMesh":
-        return ColliderMesh(self.name, self.vertices + np.asarray(offset, float), self.faces, self.velocity)
+        return ColliderMesh(self.name, self.vertices + np.asarray(offset, float), self.faces, self.velocity,
+                            self.vertex_parts)
 
     def to_trimesh(self) -> trimesh.Trimesh:
         return trimesh.Trimesh(self.vertices, self.faces, process=False)

@@ -18,6 +18,8 @@ from ..units import length_unit
 from .body import Body, landmarks_from_stature
 from .collider import ColliderMesh
 from .dress_form import SIZES, dress_form
+from .measurements import read_measurements
+from .segmentation import read_segmentation
 
 FORMATS = (".obj", ".ply", ".stl", ".glb", ".gltf", ".off")
 UP_AXES = {"z": np.eye(3), "y": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]),
@@ -69,14 +71,14 @@ def load_body(spec: str | Path, *, units: str | None = None, up: str | None = No
                            f"outside {STATURE_RANGE[0]}-{STATURE_RANGE[1]} m; check --body-units and --up")
     rotation = UP_AXES[up]
     points = (vertices * scale) @ rotation.T
-    collider = ColliderMesh(path.stem, points, faces)
+    collider = ColliderMesh(path.stem, points, faces, vertex_parts=read_segmentation(path, len(points)))
     if not mesh.is_watertight:
         raise InvalidInput(f"{path}: the body mesh is not closed (it has holes); close it before draping")
     marks = landmarks_from_stature(points)
     axis_sel = np.abs(points[:, 2] - marks["waist"]) < 0.05
     axis = tuple(np.median(points[axis_sel, :2], axis=0)) if axis_sel.any() else (0.0, 0.0)
     return Body(path.stem, (collider,), marks, axis=(float(axis[0]), float(axis[1])),
-                to_source=rotation.T)
+                to_source=rotation.T, measurements=read_measurements(path))
 
 
 def _detect_scale(stature: float, path: Path) -> float:

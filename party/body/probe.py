@@ -13,13 +13,16 @@ wp.set_module_options({"enable_backward": False})  # no adjoints: party never di
 
 @wp.kernel
 def _inside_and_distance(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,
+                         ignored: wp.array(dtype=int), face_parts: wp.array(dtype=int),
                          inside: wp.array(dtype=int), distance: wp.array(dtype=float)):
+    """Inside: behind the nearest face, unless that face is of a body part the point passes
+    through (``ignored[i] & face_parts[face]``)."""
     i = wp.tid()
     q = wp.mesh_query_point_sign_winding_number(mesh, points[i], max_dist)
     if q.result:
         p = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
         distance[i] = wp.length(points[i] - p)
-        if q.sign < 0.0:
+        if q.sign < 0.0 and (ignored[i] & face_parts[q.face]) == 0:
             inside[i] = 1
 
 
@@ -33,17 +36,23 @@ class ColliderProbe:
                     indices=wp.array(c.faces.ravel().astype(np.int32), dtype=int, device=self.device))
             for c in colliders
         ]
+        self.face_parts = [wp.array(c.face_parts(), dtype=int, device=self.device) for c in colliders]
 
-    def inside_and_distance(self, points: np.ndarray, max_dist: float = 1.0e3) -> tuple[np.ndarray, np.ndarray]:
+    def inside_and_distance(self, points: np.ndarray, max_dist: float = 1.0e3,
+                            ignored_parts: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """For each point [m]: inside any (closed) collider? and its distance to the nearest
-        collider surface [m]."""
+        collider surface [m]. A point inside a body part it passes through (its
+        ``ignored_parts`` bits, :mod:`party.body.segmentation`) is not counted inside."""
         n = len(points)
         pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=self.device)
+        ignored = wp.array(np.zeros(n, np.int32) if ignored_parts is None else np.asarray(ignored_parts, np.int32),
+                           dtype=int, device=self.device)
         inside = wp.zeros(n, dtype=int, device=self.device)
         nearest = np.full(n, 1.0e30)
-        for mesh in self.meshes:
+        for mesh, parts in zip(self.meshes, self.face_parts):
             distance = wp.full(n, 1.0e30, dtype=float, device=self.device)
-            launch(_inside_and_distance, dim=n, inputs=[mesh.id, pts, max_dist, inside, distance], device=self.device)
+            launch(_inside_and_distance, dim=n, inputs=[mesh.id, pts, max_dist, ignored, parts, inside, distance],
+                   device=self.device)
             nearest = np.minimum(nearest, distance.numpy())
         return inside.numpy().astype(bool), nearest
 

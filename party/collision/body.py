@@ -69,6 +69,7 @@ def _gather_body_faces(bvh: bool):
                           inv_mass: wp.array(dtype=float), thickness: wp.array(dtype=float), structure: structure_type,
                           dt: float, margin: float, everything: int, continuing: int, ref: wp.array(dtype=wp.vec3),
                           ref_step: wp.array(dtype=wp.vec3), searched_again: wp.array(dtype=int),
+                          ignored_parts: wp.array(dtype=int), face_parts: wp.array(dtype=int),
                           faces_out: wp.array(dtype=int, ndim=2), face_count: wp.array(dtype=int),
                           overflow: wp.array(dtype=int)):
         """Section 6.1's search: the box spanned by r and r + dr, grown by eps and a margin that
@@ -77,7 +78,9 @@ def _gather_body_faces(bvh: bool):
         triangles). The triangles found are kept for the narrow phase, and r in ``ref`` and the
         step in ``ref_step``. With ``everything`` 0 only nodes whose step left the region
         searched (:func:`covered`) search again (the body must be static then, or
-        ``continuing``); with ``continuing`` 1 they are marked in ``searched_again``."""
+        ``continuing``); with ``continuing`` 1 they are marked in ``searched_again``. Faces of
+        the body parts a node passes through (``ignored_parts[i] & face_parts[f]``) are not
+        kept."""
         i = first + wp.tid()
         if everything == 0 and covered(x[i], v[i], dt, ref[i], ref_step[i], margin, continuing,
                                        face_count[i] < MAX_FACES):
@@ -91,11 +94,13 @@ def _gather_body_faces(bvh: bool):
             return
         lo, hi = step_box(x[i], v[i] * dt, thickness[i] + margin)
         count = int(0)
+        ignored = ignored_parts[i]
         if wp.static(bvh):
             query = wp.bvh_query_aabb(structure, lo, hi)
             f = int(0)
             while wp.bvh_query_next(query, f):
-                count = keep_face(i, f, count, faces_out, overflow)
+                if (face_parts[f] & ignored) == 0:
+                    count = keep_face(i, f, count, faces_out, overflow)
         else:
             sel = query_axis(structure, lo, hi)
             axis = sel[0]
@@ -103,7 +108,7 @@ def _gather_body_faces(bvh: bool):
             for c in range(sel[1], sel[2] + 1):
                 for j in range(structure.offsets[base + c], structure.offsets[base + c + 1]):
                     f = structure.ids[j]
-                    if found_once(structure, f, lo, hi, axis, sel[1], c):
+                    if found_once(structure, f, lo, hi, axis, sel[1], c) and (face_parts[f] & ignored) == 0:
                         count = keep_face(i, f, count, faces_out, overflow)
         face_count[i] = count
 

@@ -119,6 +119,8 @@ def gather_body_vertices(
     ref: wp.array(dtype=wp.vec3, ndim=2),
     ref_step: wp.array(dtype=wp.vec3, ndim=2),
     searched_again: wp.array(dtype=int),
+    ignored_parts: wp.array(dtype=int),
+    vertex_parts: wp.array(dtype=int),
     out: wp.array(dtype=int, ndim=2),
     out_count: wp.array(dtype=int),
     out_distance: wp.array(dtype=float, ndim=2),
@@ -132,7 +134,9 @@ def gather_body_vertices(
     nodes' places in ``ref`` and their steps in ``ref_step``. With ``everything`` 0 only
     triangles with a node whose step left the region searched for it
     (:func:`~party.collision.body.covered`) search again (the body must be static then, or
-    ``continuing``); with ``continuing`` 1 their nodes are marked in ``searched_again``."""
+    ``continuing``); with ``continuing`` 1 their nodes are marked in ``searched_again``.
+    Vertices of the body parts all three nodes pass through (``ignored_parts``,
+    ``vertex_parts``) are not kept."""
     t = first + wp.tid()
     a = tris[t, 0]
     b = tris[t, 1]
@@ -160,8 +164,11 @@ def gather_body_vertices(
     reach = eps + 2.0 * margin + triangle_step(a, b, c, v, dt)
     item = int(0)
     count = int(0)
+    ignored = ignored_parts[a] & ignored_parts[b] & ignored_parts[c]
     while wp.bvh_query_next(query, item):
         p = tested[item]
+        if (vertex_parts[p] & ignored) != 0:
+            continue
         w = closest_point_barycentric(body_q[p], x[a], x[b], x[c])
         dist = wp.length(body_q[p] - interpolate(w, x[a], x[b], x[c]))
         if dist > reach + wp.length(body_qd[p]) * dt:

@@ -441,8 +441,8 @@ class CollisionPipeline:
                              else (gather_body_faces, self.body_lists.lists))
         launch_items(gather, 0, m.node_count,
                      [x, v, m.node_inv_mass, m.node_thickness, structure, dt, half, everything, int(continuing),
-                      self._body_ref, self._body_step_ref, self._searched_again, self.body_faces,
-                      self.body_face_count, self._overflow], dev)
+                      self._body_ref, self._body_step_ref, self._searched_again, m.node_ignored_parts,
+                      m.collider_face_parts, self.body_faces, self.body_face_count, self._overflow], dev)
         if self.has_body_vertices:
             if self._vertex_tree is None or (self.body_moving and not continuing):
                 launch(vertex_boxes, dim=self.tested_vertices.shape[0],
@@ -455,7 +455,8 @@ class CollisionPipeline:
             launch_items(gather_body_vertices, 0, m.triangle_count,
                          [x, v, m.node_thickness, m.triangle_nodes, self._vertex_tree.id, self.tested_vertices,
                           state.collider_q, state.collider_qd, dt, half, everything, int(continuing),
-                          self._triangle_ref, self._triangle_step_ref, self._searched_again, self.body_vertices,
+                          self._triangle_ref, self._triangle_step_ref, self._searched_again,
+                          m.node_ignored_parts, m.collider_vertex_parts, self.body_vertices,
                           self.body_vertex_count, self._vertex_distance, self._overflow], dev)
         if self.after_body_search is not None:
             self.after_body_search(self, x, v, state, dt, continuing)

@@ -28,6 +28,7 @@ from ..progress import relax_progress
 from ..solvers.explicit import SolverExplicit
 from ..solvers.relax import KINETIC_MOMENTUM, RelaxResult, StaticRelaxation
 from .assemble import Garment
+from .body_parts import garment_ignored_parts, sewn_ignored_parts
 from .dressing import dress
 from .worn import garment_model
 
@@ -121,6 +122,10 @@ class Sewn:
     def max_seam_gap(self) -> float:
         """Largest seam gap [m] when the seams were joined."""
         return float(self.seam_gaps.max()) if len(self.seam_gaps) else 0.0
+
+    def ignored_parts(self) -> np.ndarray:
+        """The body parts each sewn node passes through (:mod:`party.garment.body_parts`)."""
+        return sewn_ignored_parts(self.garment, self.node_map)
 
 
 @dataclass
@@ -220,7 +225,8 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
 
     gamma, kappa = settings.exchange
     joined = garment_model(net, fabric.with_(friction=0.0, momentum_propagation=gamma, cloth_friction=kappa), merged,
-                           body, gravity=False, device=device, sewn=False)
+                           body, gravity=False, device=device, sewn=False,
+                           ignored_parts=sewn_ignored_parts(garment, node_map))
     state = joined.state()
     settle = settings.stage_iterations
     settling = StaticRelaxation(joined, collision=presets.SETTLING, max_speed=settings.settling_speed)
@@ -266,13 +272,15 @@ def _reached(on_stage: Callable[[SewingStage], None] | None, stage: SewingStage)
 def _panels_model(garment: Garment, fabric: Fabric, points: np.ndarray, body: Body, pairs: np.ndarray,
                   seam_strain_limit: float, settings: SewingSettings, device: str | None) -> Model:
     """The unsewn panels at ``points`` [m] without gravity, skin friction or plastic limit,
-    tied by sewing springs between node ``pairs`` with plastic limit ``seam_strain_limit``."""
+    tied by sewing springs between node ``pairs`` with plastic limit ``seam_strain_limit``; its
+    nodes pass through the body parts their panels' labels say (:mod:`party.garment.body_parts`)."""
     builder = ModelBuilder(gravity=(0.0, 0.0, 0.0))
     builder.add_cloth(garment.net, fabric.with_(friction=0.0, strain_limit=float("inf")), points, name="panels")
     if len(pairs):
         stiffness = settings.seam_stiffness * float(np.median(builder.element_stiffness))
         builder.add_springs(pairs, stiffness=stiffness, rest_length=settings.seam_rest_length,
                             strain_limit=seam_strain_limit)
+    builder.ignore_body_parts(np.arange(garment.node_count), garment_ignored_parts(garment))
     for collider in body.colliders:
         builder.add_collider(collider)
     return builder.finalize(device)

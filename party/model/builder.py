@@ -71,6 +71,7 @@ class ModelBuilder:
         self._hinges: list[tuple] = []  # nodes, weights, stiffness, friction stiffness, slip limit
         self._membranes: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # inverse rest, area, C
         self._kinematic: set[int] = set()
+        self._ignored_parts: dict[int, int] = {}  # node -> body-part bits it passes through
         self._colliders: list[ColliderMesh] = []
         self.cloths: list[ClothRange] = []
         self._node_count = 0
@@ -171,6 +172,18 @@ class ModelBuilder:
             raise InvalidInput(f"pinned node index out of range [0, {self._node_count}): {nodes.tolist()[:5]}")
         self._kinematic.update(int(n) for n in nodes)
 
+    def ignore_body_parts(self, nodes, parts) -> None:
+        """Let each of ``nodes`` pass through the colliders' faces and vertices of the body parts
+        ``parts`` (bits of :mod:`party.body.segmentation`, one for all or one per node):
+        GarmentCode's collision filter, a skirt's cloth through the arms."""
+        nodes = np.atleast_1d(np.asarray(nodes, np.int64))
+        parts = np.broadcast_to(np.asarray(parts, np.int64), nodes.shape)
+        if nodes.size and (nodes.min() < 0 or nodes.max() >= self._node_count):
+            raise InvalidInput(f"filtered node index out of range [0, {self._node_count})")
+        for node, bits in zip(nodes.tolist(), parts.tolist()):
+            if bits:
+                self._ignored_parts[node] = self._ignored_parts.get(node, 0) | int(bits)
+
     def add_collider(self, collider: ColliderMesh) -> None:
         if not isinstance(collider, ColliderMesh):
             raise InvalidInput("colliders must be ColliderMesh objects (see party.body)")
@@ -244,6 +257,12 @@ class ModelBuilder:
         kinematic = np.zeros(self._node_count, bool)
         kinematic[list(self._kinematic)] = True
         inv_mass = np.where(kinematic, 0.0, 1.0 / mass)
+        ignored = np.zeros(self._node_count, np.int32)
+        ignored[list(self._ignored_parts)] = list(self._ignored_parts.values())
+        face_parts = (np.concatenate([c.face_parts() for c in self._colliders]) if self._colliders
+                      else np.zeros(0, np.int32))
+        vertex_parts = (np.concatenate([c.part_bits() for c in self._colliders]) if self._colliders
+                        else np.zeros(0, np.int32))
 
         n = self._node_count
         elem_offsets, elem_ids = _csr(np.concatenate([elements[:, 0], elements[:, 1]]),
@@ -304,6 +323,9 @@ class ModelBuilder:
             hinge_slip_limit=arr(hinge_slip_limit.astype(np.float32), wp.float32),
             collider_names=names,
             collider_face_ranges=ranges,
+            node_ignored_parts=arr(ignored, wp.int32),
+            collider_face_parts=arr(face_parts.astype(np.int32), wp.int32),
+            collider_vertex_parts=arr(vertex_parts.astype(np.int32), wp.int32),
             collider_faces=arr(faces, wp.int32),
             collider_rest_points=arr(rest_pts.astype(np.float32), wp.vec3),
             collider_normals=arr(normals.astype(np.float32), wp.vec3),
@@ -314,7 +336,8 @@ class ModelBuilder:
                 element_rest_length=params[:, 0], element_stiffness=params[:, 1], element_damping=params[:, 2],
                 element_max_length=params[:, 3], triangles=triangles, hinge_nodes=hinge_nodes,
                 hinge_weights=hinge_weights, hinge_stiffness=hinge_stiffness, hinge_friction=hinge_friction,
-                membrane_area=membrane_area, cloths=tuple(self.cloths), colliders=tuple(self._colliders),
+                membrane_area=membrane_area, ignored_parts=ignored, cloths=tuple(self.cloths),
+                colliders=tuple(self._colliders),
             ),
         )
 

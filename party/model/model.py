@@ -28,6 +28,7 @@ class HostArrays:
         hinge_nodes, hinge_weights: Each bending stencil's nodes and curvature weights.
         hinge_stiffness, hinge_friction: Each stencil's bending and hysteresis stiffness [N*m^3].
         membrane_area: Rest area [m^2] of each membrane triangle (0 for the others).
+        ignored_parts: See ``node_ignored_parts`` of :class:`Model`.
         cloths: The cloths added, in order.
         colliders: The colliders added, in order.
     """
@@ -46,6 +47,7 @@ class HostArrays:
     hinge_stiffness: np.ndarray
     hinge_friction: np.ndarray
     membrane_area: np.ndarray
+    ignored_parts: np.ndarray
     cloths: tuple
     colliders: tuple
 
@@ -97,6 +99,10 @@ class Model:
         hinge_slip_limit: The largest |friction * (k - k_slip)| before the element slips
             [N*m]: HB * scale.
         collider_faces: Triangles of all colliders together, int32 shape [c, 3].
+        node_ignored_parts: The body parts (bits of :mod:`party.body.segmentation`) each node
+            passes through, int32; 0 for a node that collides with all of the body.
+        collider_face_parts, collider_vertex_parts: The body parts of each collider face (all
+            three corners in the part) and of each collider vertex, int32; 0 in none.
         collider_rest_points: Collider vertex positions at set-up [m].
         collider_normals: Collider normals at each face corner at set-up, unit, vec3 shape
             [c, 3] (smooth across soft edges, the face normal across creases).
@@ -142,6 +148,9 @@ class Model:
     hinge_slip_limit: wp.array
     collider_names: tuple[str, ...]
     collider_face_ranges: tuple[tuple[int, int], ...]
+    node_ignored_parts: wp.array
+    collider_face_parts: wp.array
+    collider_vertex_parts: wp.array
     collider_faces: wp.array
     collider_rest_points: wp.array
     collider_normals: wp.array

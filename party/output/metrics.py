@@ -38,7 +38,7 @@ def _edge_crossings(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), tris: wp.a
     while wp.mesh_query_aabb_next(query, t):
         if edge_pierces_triangle(i, k, t, points, tris):
             wp.atomic_add(count, 0, 1)
-            crossed[e] = 1
+            crossed[e] = t + 1
 
 
 @wp.kernel
@@ -112,10 +112,12 @@ def cloth_crossings(points: np.ndarray, triangles: np.ndarray, device: str = "cp
     return crossing_edges(points, triangles, device)[0]
 
 
-def crossing_edges(points: np.ndarray, triangles: np.ndarray, device: str = "cpu") -> tuple[int, np.ndarray]:
-    """The crossing count of :func:`cloth_crossings` and the node pairs of the crossing edges."""
+def crossing_edges(points: np.ndarray, triangles: np.ndarray,
+                   device: str = "cpu") -> tuple[int, np.ndarray, np.ndarray]:
+    """The crossing count of :func:`cloth_crossings`, the node pairs of the crossing edges and
+    a triangle each of them passes through."""
     if len(triangles) == 0:
-        return 0, np.zeros((0, 2), int)
+        return 0, np.zeros((0, 2), int), np.zeros(0, int)
     edges = triangle_edges(triangles)
     pts = wp.array(points.astype(np.float32), dtype=wp.vec3, device=device)
     mesh = wp.Mesh(points=pts, indices=wp.array(triangles.ravel().astype(np.int32), dtype=int, device=device))
@@ -124,7 +126,8 @@ def crossing_edges(points: np.ndarray, triangles: np.ndarray, device: str = "cpu
     launch(_edge_crossings, dim=len(edges),
            inputs=[mesh.id, pts, wp.array(triangles.astype(np.int32), dtype=int, device=device),
                    wp.array(edges.astype(np.int32), dtype=wp.vec2i, device=device), count, crossed], device=device)
-    return int(count.numpy()[0]), edges[crossed.numpy().astype(bool)]
+    crossed = crossed.numpy()
+    return int(count.numpy()[0]), edges[crossed > 0], crossed[crossed > 0] - 1
 
 
 def max_elongation(points: np.ndarray, elements: np.ndarray, rest_length: np.ndarray, limited: np.ndarray) -> float:

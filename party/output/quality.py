@@ -42,17 +42,32 @@ def drape_quality(summary: dict, thickness: float) -> dict:
         reasons.append(f"not on the body: its nearest node is {nearest:.0f} mm from it")
     elif median > HANGING_OFF_MM and summary["body_distance_mm"]["near_share"] < NEAR_SHARE:
         reasons.append(f"not on the body: half its nodes are more than {median:.0f} mm from it")
+    where = summary.get("where", {})
     if summary["body_penetrations"]:
-        reasons.append(f"{summary['body_penetrations']} nodes inside the body")
+        reasons.append(f"{summary['body_penetrations']} nodes inside the body{_at(where.get('inside'))}")
     if summary["cloth_crossings"]:
-        reasons.append(f"{summary['cloth_crossings']} cloth crossings")
+        reasons.append(f"{summary['cloth_crossings']} cloth crossings{_at(where.get('crossings'))}")
     if summary["max_seam_gap_mm"] > MAX_SEAM_GAP_MM:
         seam, gap = max(summary["seam_gaps_mm"].items(), key=lambda item: item[1])
-        reasons.append(f"seam {seam} open {gap:.1f} mm")
+        reasons.append(f"seam {seam} left open {gap:.1f} mm by the sewing")
     if summary["max_elongation"] > MAX_ELONGATION:
-        reasons.append(f"stretched to {summary['max_elongation']:.2f} times rest (at most {MAX_ELONGATION})")
+        reasons.append(f"stretched to {summary['max_elongation']:.2f} times rest (at most {MAX_ELONGATION})"
+                       f"{_at(where.get('stretched'))}")
     if not summary["relaxation"]["at_rest"]:
-        reasons.append("not at rest")
+        reasons.append("not at rest at the end of the draping")
     if summary["timed_out"]:
         reasons.append(f"ran past its time limit of {summary['time_limit_s']:g} s and was stopped there")
     return {"passed": not reasons, "reasons": reasons}
+
+
+STAGES = {"sewing": "since the sewing", "draping": "in the draping"}
+"""How a reason says which stage brought a fault (:func:`party.output.locate.locate`)."""
+
+
+def _at(fault: dict | None) -> str:
+    """", in panel 'a' and panel 'b', since the sewing" for a fault located by
+    :func:`party.output.locate.locate`; empty where it was not located."""
+    if not fault:
+        return ""
+    panels = " and ".join(f"panel '{name}'" for name in fault["panels"])
+    return f", in {panels}, {STAGES[fault['stage']]}" if panels else f", {STAGES[fault['stage']]}"

@@ -71,7 +71,9 @@ def pattern_from_garmentcode(doc: dict, source: str = "pattern") -> Pattern:
         translation = _numbers(p.get("translation", [0, 0, 0]), f"{where}: translation", (3,)) * scale
         rotation = euler_xyz_degrees(_numbers(p.get("rotation", [0, 0, 0]), f"{where}: rotation (degrees)", (3,)))
         placement = Placement(translation=Y_UP_TO_Z_UP @ translation, rotation=Y_UP_TO_Z_UP @ rotation)
-        panels[name] = Panel(name, tuple(edges), np.array([1.0, 0.0]), None, "shoulder", placement)
+        label = p.get("label", "")
+        panels[name] = Panel(name, tuple(edges), np.array([1.0, 0.0]), None, "shoulder", placement,
+                             label if isinstance(label, str) else "")
     seams = []
     stitches = spec.get("stitches", [])
     if not isinstance(stitches, list):

@@ -57,7 +57,7 @@ def pattern_from_document(doc: dict, source: str = "pattern") -> Pattern:
                 wrap_axis=tuple(np.asarray(p.get("wrap_axis", [0, 0]), float) * scale),
             )
         panels[name] = Panel(name, tuple(edges), np.asarray(spec["grain"], float), spec.get("part"),
-                             spec.get("anchor", "shoulder"), placement)
+                             spec.get("anchor", "shoulder"), placement, spec.get("label", ""))
     panels, refs = _split_ranges(panels, doc["seams"], source)
     seams = tuple(Seam(refs[2 * k], refs[2 * k + 1], bool(s.get("same_direction", False)))
                   for k, s in enumerate(doc["seams"]))
@@ -104,7 +104,7 @@ def _split_ranges(panels: dict[str, Panel], seams: list[dict], source: str):
                 else:
                     piece = rest
                 edges.append(piece)
-        panels[name] = Panel(name, tuple(edges), panel.grain, panel.part, panel.anchor, panel.placement)
+        panels[name] = Panel(name, tuple(edges), panel.grain, panel.part, panel.anchor, panel.placement, panel.label)
     refs = []
     for name, k, lo, hi in resolved:
         points = sorted(cuts[(name, k)])

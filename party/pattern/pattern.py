@@ -83,6 +83,9 @@ class Panel:
         anchor: For front/back panels placed automatically: the body height their top sits
             at (one of :data:`ANCHORS`).
         placement: 3-D placement, or None to place automatically.
+        label: What the panel covers in GarmentCode's words (``body``, ``leg``, ``arm``; empty
+            when the pattern does not say): a ``leg`` panel (a skirt's, a pair of trousers')
+            does not collide with the arms, as in GarmentCode's simulator.
     """
 
     name: str
@@ -91,6 +94,7 @@ class Panel:
     part: str | None = None
     anchor: str = "shoulder"
     placement: Placement | None = None
+    label: str = ""
 
     def outline(self) -> np.ndarray:
         """Closed outline as a polyline [m] (first point not repeated)."""

@@ -21,7 +21,8 @@ each other at once. Output layout::
                                        relaxation (sewing iterations, draping steps and
                                        simulated seconds, at_rest, final energy [J]),
                                        quality (passed, reasons: :mod:`party.output.quality`),
-                                       time_limit_s, timed_out,
+                                       time_limit_s, timed_out, where (the panels and
+                                       the stage of each fault: :mod:`party.output.locate`),
                                        wall_seconds (resumed drapes: all runs')
     OUT/checkpoint.npz                 while it runs: the sewing after each of its stages,
                                        the sewn garment, then the draping state,
@@ -53,6 +54,7 @@ from ..output.folder import check_output_path, open_output
 from ..output.frames import write_json, write_mesh
 from ..output.garment_export import write_garment
 from ..output.metrics import body_vertices_through, cloth_crossings, elements_beyond_limit, max_elongation
+from ..output.locate import locate
 from ..output.quality import NEAR_MM, drape_quality
 from ..pattern import load_pattern
 from ..resources import DRAPE_FOOTPRINT, check_memory, check_time_limit
@@ -141,7 +143,8 @@ def drape(pattern: Path, body: str, fabric: Fabric, out: Path, settings: DrapeSe
 
         sewn = checkpoint.sew(saved, wall, garment, the_body, fabric, settings.sewing, device=device, progress=progress,
                               stop=time_is_up)
-        model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name)
+        model = garment_model(sewn.net, fabric, sewn.points, the_body, device=device, name=the_pattern.name,
+                              ignored_parts=sewn.ignored_parts())
         state = model.state()
         first_step, energy = restore_draping(state, saved)
 
@@ -181,7 +184,9 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
     (:func:`party.output.quality.drape_quality`)."""
     host = model.host
     limited = model.limited_elements
-    inside, distance = ColliderProbe(the_body.colliders, model.device).inside_and_distance(points)
+    probe = ColliderProbe(the_body.colliders, model.device)
+    ignored = sewn.ignored_parts()
+    inside, distance = probe.inside_and_distance(points, ignored_parts=ignored)
     summary = {
         "pattern": str(pattern), "body": str(body), "fabric": fabric.name, "solver": settings.solver,
         "spacing_m": settings.spacing,
@@ -207,6 +212,9 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
         "mesh_quality": garment.quality(),
         "time_limit_s": settings.time_limit,
         "timed_out": timed_out,
+        "where": locate(points, sewn.points, host.elements, host.element_rest_length, limited, inside,
+                        probe.inside_and_distance(sewn.points, ignored_parts=ignored)[0], model.triangles,
+                        garment.triangle_panel(), list(the_pattern.panels), model.device),
     }
     summary["quality"] = drape_quality(summary, fabric.thickness)
     return summary

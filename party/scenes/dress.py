@@ -90,7 +90,8 @@ def build(settings: Settings = Settings(), *, device: str | None = None, out: Pa
         saved = checkpoint.load() if resume else None
         sewn = checkpoint.sew(saved, checkpoint.wall_clock(saved, time.perf_counter()), garment, body, fabric, sewing,
                               device=device, progress=progress)
-    model = garment_model(sewn.net, fabric, sewn.points, body, device=device, name="dress")
+    model = garment_model(sewn.net, fabric, sewn.points, body, device=device, name="dress",
+                          ignored_parts=sewn.ignored_parts())
     scene = Scene(
         name="dress", model=model, solver=make_solver(solver, model, collision=guarded(dt)),
         dt=dt, duration=duration,
