@@ -3,6 +3,7 @@
 import numpy as np
 
 from party.output.locate import locate, node_panels
+from party.output.metrics import crossing_edges
 
 
 def two_squares(gap: float = 0.5):
@@ -26,7 +27,8 @@ def test_the_most_stretched_element_names_its_panel_and_the_stage_that_stretched
     draped = sewn.copy()
     draped[5, 0] += 0.6  # the right square's element 4-5 at 1.6 times rest, nothing else beyond 1.3
     none = np.zeros(len(sewn), bool)
-    args = (elements, rest, limited, none, none, triangles, np.array([0, 0, 1, 1]), ["left", "right"])
+    args = (elements, rest, limited, none, none, triangles, crossing_edges(draped, triangles), np.array([0, 0, 1, 1]),
+            ["left", "right"])
     assert locate(draped, sewn, *args)["stretched"] == {"panels": ["right"], "stage": "draping"}
     assert locate(draped, draped, *args)["stretched"] == {"panels": ["right"], "stage": "sewing"}
     assert "inside" not in locate(draped, sewn, *args) and "crossings" not in locate(draped, sewn, *args)
@@ -37,9 +39,12 @@ def test_nodes_inside_the_body_name_their_panels_most_first_and_whether_the_sewi
     inside = np.array([0, 0, 0, 1, 1, 1, 1, 0], bool)
     sewn_inside = np.array([1, 0, 0, 0, 0, 0, 0, 0], bool)
     panels = np.array([0, 0, 1, 1])
-    where = locate(points, points, elements, rest, limited, inside, sewn_inside, triangles, panels, ["left", "right"])
+    crossings = crossing_edges(points, triangles)
+    where = locate(points, points, elements, rest, limited, inside, sewn_inside, triangles, crossings, panels,
+                   ["left", "right"])
     assert where["inside"] == {"panels": ["right", "left"], "stage": "draping"}
-    where = locate(points, points, elements, rest, limited, inside, inside, triangles, panels, ["left", "right"])
+    where = locate(points, points, elements, rest, limited, inside, inside, triangles, crossings, panels,
+                   ["left", "right"])
     assert where["inside"]["stage"] == "sewing"
 
 
@@ -49,7 +54,8 @@ def test_cloth_crossing_cloth_names_the_panels_that_cross():
     draped[[4, 7], 2] = -0.3  # the right square tilted through the left one
     draped[[5, 6], 2] = 0.3
     none = np.zeros(len(sewn), bool)
-    args = (elements, rest, limited, none, none, triangles, np.array([0, 0, 1, 1]), ["left", "right"])
+    args = (elements, rest, limited, none, none, triangles, crossing_edges(draped, triangles), np.array([0, 0, 1, 1]),
+            ["left", "right"])
     where = locate(draped, sewn, *args)
     assert sorted(where["crossings"]["panels"]) == ["left", "right"]
     assert where["crossings"]["stage"] == "draping"

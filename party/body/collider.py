@@ -90,7 +90,7 @@ class ColliderMesh:
         corners = self.vertex_parts[self.faces]
         return corners[:, 0] & corners[:, 1] & corners[:, 2]
 
-    def part_bits(self) -> np.ndarray:
+    def vertex_part_bits(self) -> np.ndarray:
         """:attr:`vertex_parts`, zeros for a collider without parts, shape (n,) int32."""
         return np.zeros(len(self.vertices), np.int32) if self.vertex_parts is None else self.vertex_parts
 

@@ -71,7 +71,7 @@ class ModelBuilder:
         self._hinges: list[tuple] = []  # nodes, weights, stiffness, friction stiffness, slip limit
         self._membranes: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # inverse rest, area, C
         self._kinematic: set[int] = set()
-        self._ignored_parts: dict[int, int] = {}  # node -> body-part bits it passes through
+        self._ignored_parts: list[tuple[np.ndarray, np.ndarray]] = []  # nodes, body-part bits they pass through
         self._colliders: list[ColliderMesh] = []
         self.cloths: list[ClothRange] = []
         self._node_count = 0
@@ -177,12 +177,9 @@ class ModelBuilder:
         ``parts`` (bits of :mod:`party.body.segmentation`, one for all or one per node):
         GarmentCode's collision filter, a skirt's cloth through the arms."""
         nodes = np.atleast_1d(np.asarray(nodes, np.int64))
-        parts = np.broadcast_to(np.asarray(parts, np.int64), nodes.shape)
         if nodes.size and (nodes.min() < 0 or nodes.max() >= self._node_count):
             raise InvalidInput(f"filtered node index out of range [0, {self._node_count})")
-        for node, bits in zip(nodes.tolist(), parts.tolist()):
-            if bits:
-                self._ignored_parts[node] = self._ignored_parts.get(node, 0) | int(bits)
+        self._ignored_parts.append((nodes, np.broadcast_to(np.asarray(parts, np.int32), nodes.shape)))
 
     def add_collider(self, collider: ColliderMesh) -> None:
         if not isinstance(collider, ColliderMesh):
@@ -258,10 +255,11 @@ class ModelBuilder:
         kinematic[list(self._kinematic)] = True
         inv_mass = np.where(kinematic, 0.0, 1.0 / mass)
         ignored = np.zeros(self._node_count, np.int32)
-        ignored[list(self._ignored_parts)] = list(self._ignored_parts.values())
+        for nodes, parts in self._ignored_parts:
+            np.bitwise_or.at(ignored, nodes, parts)
         face_parts = (np.concatenate([c.face_parts() for c in self._colliders]) if self._colliders
                       else np.zeros(0, np.int32))
-        vertex_parts = (np.concatenate([c.part_bits() for c in self._colliders]) if self._colliders
+        vertex_parts = (np.concatenate([c.vertex_part_bits() for c in self._colliders]) if self._colliders
                         else np.zeros(0, np.int32))
 
         n = self._node_count

@@ -30,7 +30,8 @@ def _named(panels, names: list[str]) -> list[str]:
 
 def locate(points: np.ndarray, sewn_points: np.ndarray, elements: np.ndarray, rest_length: np.ndarray,
            limited: np.ndarray, inside: np.ndarray, sewn_inside: np.ndarray, triangles: np.ndarray,
-           triangle_panel: np.ndarray, names: list[str], device: str = "cpu") -> dict:
+           crossings: tuple[int, np.ndarray, np.ndarray], triangle_panel: np.ndarray, names: list[str],
+           device: str = "cpu") -> dict:
     """The summary's ``where``: for the most stretched warp/weft element, its panel and the stage
     whose result already held it beyond :data:`~party.output.quality.MAX_ELONGATION`; for the
     nodes inside the body and the crossing cloth edges at the end, their panels (an edge's and the
@@ -39,6 +40,7 @@ def locate(points: np.ndarray, sewn_points: np.ndarray, elements: np.ndarray, re
 
     ``points`` (n, 3) [m] the draped nodes; ``elements`` (e, 2), ``rest_length`` (e,) [m] and
     ``limited`` (e,) the model's elements; ``inside`` (n,) the draped nodes inside the body;
+    ``crossings`` the draped cloth's :func:`~party.output.metrics.crossing_edges`;
     ``triangle_panel`` the panel index of each of ``triangles`` and ``names`` the panels'
     names."""
     panel = node_panels(triangles, triangle_panel, len(points))
@@ -53,7 +55,7 @@ def locate(points: np.ndarray, sewn_points: np.ndarray, elements: np.ndarray, re
     if inside.any():
         where["inside"] = {"panels": _named(panel[inside], names),
                            "stage": "sewing" if (inside & sewn_inside).any() else "draping"}
-    count, edges, pierced = crossing_edges(points, triangles, device)
+    count, edges, pierced = crossings
     if count:
         where["crossings"] = {"panels": _named(np.concatenate([panel[edges[:, 0]], triangle_panel[pierced]]), names),
                               "stage": "sewing" if crossing_edges(sewn_points, triangles, device)[0] else "draping"}

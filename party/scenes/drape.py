@@ -53,7 +53,7 @@ from ..model import State
 from ..output.folder import check_output_path, open_output
 from ..output.frames import write_json, write_mesh
 from ..output.garment_export import write_garment
-from ..output.metrics import body_vertices_through, cloth_crossings, elements_beyond_limit, max_elongation
+from ..output.metrics import body_vertices_through, crossing_edges, elements_beyond_limit, max_elongation
 from ..output.locate import locate
 from ..output.quality import NEAR_MM, drape_quality
 from ..pattern import load_pattern
@@ -185,8 +185,8 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
     host = model.host
     limited = model.limited_elements
     probe = ColliderProbe(the_body.colliders, model.device)
-    ignored = sewn.ignored_parts()
-    inside, distance = probe.inside_and_distance(points, ignored_parts=ignored)
+    inside, distance = probe.inside_and_distance(points, ignored_parts=host.ignored_parts)
+    crossings = crossing_edges(points, model.triangles, model.device)
     summary = {
         "pattern": str(pattern), "body": str(body), "fabric": fabric.name, "solver": settings.solver,
         "spacing_m": settings.spacing,
@@ -198,7 +198,7 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
         "body_distance_mm": {"nearest": round(1000.0 * float(distance.min()), 3),
                              "median": round(1000.0 * float(np.median(distance)), 3),
                              "near_share": round(float((distance < NEAR_MM / 1000.0).mean()), 4)},
-        "cloth_crossings": cloth_crossings(points, model.triangles, model.device),
+        "cloth_crossings": crossings[0],
         "body_vertices_through_cloth": body_vertices_through(points, model.triangles, the_body.colliders,
                                                              device=model.device),
         "max_elongation": max_elongation(points, host.elements, host.element_rest_length, limited),
@@ -213,8 +213,8 @@ def _summary(pattern, body, fabric: Fabric, settings: DrapeSettings, the_pattern
         "time_limit_s": settings.time_limit,
         "timed_out": timed_out,
         "where": locate(points, sewn.points, host.elements, host.element_rest_length, limited, inside,
-                        probe.inside_and_distance(sewn.points, ignored_parts=ignored)[0], model.triangles,
-                        garment.triangle_panel(), list(the_pattern.panels), model.device),
+                        probe.inside_and_distance(sewn.points, ignored_parts=host.ignored_parts)[0], model.triangles,
+                        crossings, garment.triangle_panel(), list(the_pattern.panels), model.device),
     }
     summary["quality"] = drape_quality(summary, fabric.thickness)
     return summary
