@@ -1,5 +1,6 @@
 """Sewing: a tube sewn from two panels closes around a cylinder; relaxation lowers the energy
-monotonically to a plateau; a gathered seam closes with its gathers evenly spread."""
+monotonically to a plateau; a gathered seam closes with its gathers evenly spread; a tube smaller
+than its body is stretched evenly round it."""
 
 import numpy as np
 import pytest
@@ -15,11 +16,12 @@ from party.pattern import EdgeRef, Panel, Pattern, Placement, Seam, euler_xyz_de
 W, H, R = 0.35, 0.30, 0.15
 
 
-def tube_pattern():
+def tube_pattern(radius: float = R):
+    """Two W x H panels wrapped round the z axis at ``radius`` [m], sewn side to side."""
     pts = np.array([[0, 0], [W, 0], [W, H], [0, H]])
     edges = tuple(line(pts[k], pts[(k + 1) % 4]) for k in range(4))
-    front = Placement(np.array([-W / 2, -R, 0.0]), euler_xyz_degrees([90, 0, 0]), wrap_radius=R)
-    back = Placement(np.array([W / 2, R, 0.0]), euler_xyz_degrees([90, 0, 180]), wrap_radius=R)
+    front = Placement(np.array([-W / 2, -radius, 0.0]), euler_xyz_degrees([90, 0, 0]), wrap_radius=radius)
+    back = Placement(np.array([W / 2, radius, 0.0]), euler_xyz_degrees([90, 0, 180]), wrap_radius=radius)
     panels = {"front": Panel("front", edges, np.array([0.0, 1.0]), placement=front),
               "back": Panel("back", edges, np.array([0.0, 1.0]), placement=back)}
     seams = (Seam(EdgeRef("front", 1), EdgeRef("back", 3)), Seam(EdgeRef("front", 3), EdgeRef("back", 1)))
@@ -126,3 +128,74 @@ def test_a_two_to_one_gather_closes_around_a_body_evenly_without_stretching_its_
     # and the skirt's top is drawn in to the band's girth
     radius = np.hypot(sewn.points[seam, 0], sewn.points[seam, 1])
     assert 2 * np.pi * np.median(radius) == pytest.approx(W, rel=0.15)
+
+
+def elliptic_cylinder(needs: float = 1.2) -> Body:
+    """A 2:1 elliptic cylinder along z that the tube (2 W round) must stretch ``needs`` times to go round."""
+    import trimesh
+
+    from party.body.collider import collider_from_trimesh
+
+    b = needs * 2 * W / (np.pi * (9.0 - np.sqrt(35.0)))  # Ramanujan's perimeter of a 2b by b ellipse
+    mesh = trimesh.creation.capsule(height=0.8, radius=b, count=[64, 32])
+    mesh.apply_scale([2.0, 1.0, 1.0])
+    mesh.apply_translation([0.0, 0.0, 0.15])
+    return Body("ellipse", (collider_from_trimesh(mesh, "ellipse"),), {"shoulder": 0.3})
+
+
+def test_a_tube_too_small_for_its_body_takes_the_stretch_evenly_round_it():
+    """A tube 0.70 m round sewn onto an elliptic cylinder (2:1) 0.84 m round must stretch 1.2
+    times all round: a frictionless hoop has one tension. Settled at the fabric's 10 % limit,
+    which no shape meets, the limit and the body push against each other and the stretch gathers
+    at the ellipse's ends (1.87 times rest there); the spreading that follows, at 25 %, evens it
+    out round the tube."""
+    from party.garment.sewing import SewingSettings, sew
+
+    import trimesh
+
+    needs = 1.2
+    body = elliptic_cylinder(needs)
+    c = body.colliders[0]
+    girth = trimesh.Trimesh(c.vertices, c.faces).section(plane_origin=[0, 0, 0.15], plane_normal=[0, 0, 1]).length
+    assert girth / (2 * W) == pytest.approx(needs, abs=0.01)
+    stages = []
+    sewn = sew(assemble(tube_pattern(radius=0.2), 0.02), body, wool_flannel(),
+               SewingSettings(max_iterations=3000, settling_limit=0.25), on_stage=stages.append)
+    assert "spreading" in [s.stage for s in stages]
+    assert sewn.max_seam_gap < 2e-3
+    e, rest = sewn.net.elements, sewn.net.element_rest_lengths()
+    stretch = np.linalg.norm(sewn.points[e[:, 1]] - sewn.points[e[:, 0]], axis=1) / rest
+    around, along = stretch[sewn.net.kinds == 1], stretch[sewn.net.kinds == 0]
+    assert np.median(around) == pytest.approx(needs, abs=0.03)
+    assert around.max() < needs + 0.05
+    assert along.max() < 1.0 + wool_flannel().strain_limit + 0.01  # nothing asks the tube to lengthen
+
+
+def test_a_tube_that_fits_ends_within_the_fabrics_limit():
+    """A tube with room to spare, spread first, settles at the fabric's own limit after, as the
+    paper has it."""
+    from party.garment.sewing import SewingSettings, sew
+
+    stages = []
+    sewn = sew(assemble(tube_pattern(radius=0.2), 0.02), elliptic_cylinder(0.9), wool_flannel(),
+               SewingSettings(max_iterations=3000, settling_limit=0.25), on_stage=stages.append)
+    assert [s.stage for s in stages][2] == "spreading" and stages[-1].stage == "settling"
+    e, rest = sewn.net.elements, sewn.net.element_rest_lengths()
+    stretch = np.linalg.norm(sewn.points[e[:, 1]] - sewn.points[e[:, 0]], axis=1) / rest
+    assert stretch[sewn.net.kinds < 2].max() < 1.0 + wool_flannel().strain_limit + 0.01
+
+
+def test_a_sewing_resumed_after_its_settling_keeps_the_spread_garment():
+    """A sewing resumed after its last settling round, which gathered the stretch, goes back to
+    the spread garment it saved, and ends on the same positions, bit for bit, with the same logs."""
+    from party.garment.sewing import SewingSettings, sew
+
+    garment, body = assemble(tube_pattern(radius=0.2), 0.02), elliptic_cylinder()
+    settings = SewingSettings(max_iterations=3000, settling_limit=0.25)
+    stages = []
+    whole = sew(garment, body, wool_flannel(), settings, on_stage=stages.append)
+    again_stages = []
+    again = sew(garment, body, wool_flannel(), settings, resume=stages[-1], on_stage=again_stages.append)
+    assert stages[-1].stage == "settling" and stages[-1].spread is not None and again_stages == []
+    assert np.array_equal(again.points, whole.points)
+    assert again.settling.energy == whole.settling.energy

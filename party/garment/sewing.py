@@ -56,6 +56,20 @@ class SewingSettings:
         sewing_speed: Speed cap [m/s] of the first stage, whose panels travel far.
         settling_speed: Speed cap [m/s] of the closing and the settling: no node moves beyond
             the collision search in one iteration.
+        settling_limit: The plastic limit [-] of the spreading, the settling's first phase (the
+            fabric's own limit where that is larger): a pattern smaller than its wearer, such
+            as a tall waistband sized to the waist whose lower edge reaches the hips, must
+            stretch by the difference, 20 % and more, and at the fabric's limit (10 % for most)
+            no shape satisfies it: the limit and the body push against each other and gather
+            the stretch in the few elements at the body's most curved points. Just below the
+            quality gate's 1.3 times rest, the stretch such a pattern needs is spread round it.
+            The settling at the fabric's limit follows, and its result is kept unless it leaves
+            an element beyond ``spread_beyond`` times rest, more than the spreading did: a
+            garment that fits keeps the paper's limit. Off (0: the fabric's limit only) by
+            default: GarmentCode's jumpsuit, spread, drapes with its sleeves pulled to five
+            times rest; 0.25 is the value to study.
+        spread_beyond: See ``settling_limit`` [-]: the quality gate's largest stretch; the
+            spreading's rounds also go on while elements stay beyond it.
         exchange: The settling's cloth-cloth exchange (gamma, kappa of eqs. 13-14): with both 1 a
             contact only stops the approach along its normal and leaves the sliding as it was,
             as the sewing leaves out skin friction; the fabric's own would cut a node's whole
@@ -82,6 +96,8 @@ class SewingSettings:
     momentum: float = KINETIC_MOMENTUM
     sewing_speed: float = 4.0
     settling_speed: float = 1.0
+    settling_limit: float = 0.0
+    spread_beyond: float = 1.3
     exchange: tuple[float, float] = (1.0, 1.0)
     settling_rounds: int = 10
     overstretched: float = 1.5
@@ -131,12 +147,13 @@ class Sewn:
 @dataclass
 class SewingStage:
     """Where a sewing stood after one of its stages (:func:`sew`), to go on from: ``stage``
-    "sewn" (the first stage's rounds), "closed" (the closing) or "settling" (``rounds`` of the
-    settling done), the node positions [m] then (the panels' nodes for the first two, the joined
-    garment's for the last), the relaxation's step ``dt`` [s], the logs so far (``relaxation``:
-    the first two stages; ``settling``), the elements beyond ``settings.overstretched`` before each
-    settling round and their total length beyond their limits [m] (``excess``), and the seam gaps
-    [m] at the join."""
+    "sewn" (the first stage's rounds), "closed" (the closing), "spreading" or "settling"
+    (``rounds`` of that phase of the settling done), the node positions [m] then (the panels'
+    nodes for the first two, the joined garment's after), the relaxation's step ``dt`` [s], the
+    logs so far (``relaxation``: the first two stages; ``settling``: both phases), the elements
+    beyond the phase's threshold (``settings.spread_beyond``, ``settings.overstretched``) before
+    each round and their total length beyond their limits [m] (``excess``), the seam gaps [m]
+    at the join, and the joined garment's positions [m] once spread (``spread``)."""
 
     stage: str
     points: np.ndarray
@@ -147,6 +164,7 @@ class SewingStage:
     rounds: int = 0
     seam_gaps: np.ndarray | None = None
     excess: list[float] = field(default_factory=list)
+    spread: np.ndarray | None = None
 
 
 def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings = SewingSettings(), *,
@@ -162,10 +180,13 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
        a pair is more than ``settings.open_gap`` apart;
     2. closing: each sewing spring also gets a plastic limit of ``settings.closed_gap``, which
        pulls the last millimetres shut as a constraint, body collision on;
-    3. the joined garment (paired nodes merged), its crossings undone, with its own plastic
-       limit and cloth-cloth collision on (contacts sliding freely, ``settings.exchange``),
-       so that the dynamics start from a net within its limits; for more rounds while it pulls
-       back what the first stage overstretched (``settings.settling_rounds``).
+    3. the joined garment (paired nodes merged), its crossings undone, with cloth-cloth
+       collision on (contacts sliding freely, ``settings.exchange``), so that the dynamics
+       start from a net within its limits: first, where ``settings.settling_limit`` is above
+       the fabric's limit, with the plastic limit there (the spreading), then at the fabric's
+       own (the settling), each for more rounds while it pulls back what the first stage
+       overstretched (``settings.settling_rounds``); the spread garment is kept where the
+       fabric's limit gathered its stretch beyond the gate.
 
     ``on_stage(stage)`` is called after the first stage, the closing and each settling round
     (:class:`SewingStage`), and a sewing given one as ``resume`` goes on after it. Each stage
@@ -212,7 +233,7 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
         result.iterations += closed.iterations
         points = _finite(state.positions())
         stage = _reached(on_stage, SewingStage("closed", points, dt, result))
-    if stage == "settling":
+    if stage in SETTLING_PHASES:
         seam_gaps, merged = resume.seam_gaps, points
     else:
         pair_gap = _pair_gaps(points, garment.seam_pairs)
@@ -224,30 +245,50 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
         merged, _ = untangle(merged, net.triangles, device=device)
 
     gamma, kappa = settings.exchange
-    joined = garment_model(net, fabric.with_(friction=0.0, momentum_propagation=gamma, cloth_friction=kappa), merged,
-                           body, gravity=False, device=device, sewn=False,
-                           ignored_parts=sewn_ignored_parts(garment, node_map))
-    state = joined.state()
-    settle = settings.stage_iterations
-    settling = StaticRelaxation(joined, collision=presets.SETTLING, max_speed=settings.settling_speed)
-    settling_dt = SolverExplicit.relaxation_step(joined)
-    resumed = stage == "settling"
+
+    def joined_model(limit: float, points: np.ndarray) -> Model:
+        return garment_model(net, fabric.with_(friction=0.0, momentum_propagation=gamma, cloth_friction=kappa,
+                                               strain_limit=limit), points, body, gravity=False, device=device,
+                             sewn=False, ignored_parts=sewn_ignored_parts(garment, node_map))
+
+    resumed = stage in SETTLING_PHASES
     tail = resume.settling.copy() if resumed else RelaxResult()
     overstretched = list(resume.overstretched) if resumed else []
     excess = list(resume.excess) if resumed else []
-    for round_ in range(resume.rounds if resumed else 0, settings.settling_rounds):
-        count, total = _overstretched(joined, state.positions(), settings.overstretched)
-        overstretched.append(count)
-        excess.append(total)
-        if round_ and (count == 0 or (len(excess) > 1 and total > (1.0 - settings.settling_progress) * excess[-2])
-                       or (stop is not None and stop())):
-            break
-        with relax_progress("settling seams" if round_ == 0 else "settling on", settle, progress) as on_log:
-            more = settling.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),
-                                  on_log=on_log)
-        tail.extend(more)
-        _reached(on_stage, SewingStage("settling", _finite(state.positions()), dt, result, tail, list(overstretched),
-                                       round_ + 1, seam_gaps, list(excess)))
+    spread = resume.spread if resumed else None
+    spreading = max(settings.settling_limit, fabric.strain_limit)
+    phases = [("spreading", spreading, settings.spread_beyond), ("settling", fabric.strain_limit, settings.overstretched)]
+    for phase, limit, beyond in phases:
+        if phase == "spreading" and (stage == "settling" or limit == fabric.strain_limit):
+            continue  # done before the resumed run, or nothing to spread beyond the fabric's own limit
+        joined = joined_model(limit, merged)
+        state = joined.state()
+        settle = settings.stage_iterations
+        settling = StaticRelaxation(joined, collision=presets.SETTLING, max_speed=settings.settling_speed)
+        settling_dt = SolverExplicit.relaxation_step(joined)
+        first = resume.rounds if stage == phase else 0
+        for round_ in range(first, settings.settling_rounds):
+            count, total = _overstretched(joined, state.positions(), beyond)
+            overstretched.append(count)
+            excess.append(total)
+            if round_ and (count == 0 or total > (1.0 - settings.settling_progress) * excess[-2]
+                           or (stop is not None and stop())):
+                break
+            title = "settling seams" if phase == "settling" else "spreading the stretch"
+            with relax_progress(title if round_ == 0 else f"{phase} on", settle, progress) as on_log:
+                more = settling.relax(state, settling_dt, max_iterations=settle, min_iterations=min(100, settle),
+                                      on_log=on_log)
+            tail.extend(more)
+            _reached(on_stage, SewingStage(phase, _finite(state.positions()), dt, result, tail, list(overstretched),
+                                           round_ + 1, seam_gaps, list(excess), spread))
+        if phase == "spreading":
+            spread = merged = _finite(state.positions())
+    if spread is not None:
+        worst = _largest_stretch(joined, state.positions())
+        if worst > settings.spread_beyond and worst > _largest_stretch(joined, spread):
+            # no shape meets the fabric's limit: it gathered the stretch the spreading had spread
+            joined = joined_model(spreading, spread)
+            state = joined.state()
     settled = _finite(state.positions())
     points, _ = untangle(settled, net.triangles, device=device)
     if np.abs(points - settled).max(initial=0.0) > settings.closed_gap:
@@ -260,6 +301,11 @@ def sew(garment: Garment, body: Body, fabric: Fabric, settings: SewingSettings =
                                       on_log=on_log))
         points = _finite(state.positions())
     return Sewn(garment, net, node_map, points, seam_gaps, result, tail, dt)
+
+
+SETTLING_PHASES = ("spreading", "settling")
+"""The sewing stages after the join: the spreading (:attr:`SewingSettings.settling_limit`), then
+the settling at the fabric's limit."""
 
 
 def _reached(on_stage: Callable[[SewingStage], None] | None, stage: SewingStage) -> str:
@@ -295,6 +341,15 @@ def _overstretched(model: Model, points: np.ndarray, beyond_rest: float) -> tupl
     beyond = length - model.element_max_length.numpy()[limited]
     return (int((length > beyond_rest * model.element_rest_length.numpy()[limited]).sum()),
             float(np.maximum(beyond, 0.0).sum()))
+
+
+def _largest_stretch(model: Model, points: np.ndarray) -> float:
+    """The largest length over rest length [-] of ``model``'s elements with a plastic limit at
+    ``points`` [m]."""
+    limited = model.limited_elements
+    nodes = model.element_nodes.numpy()[limited]
+    length = np.linalg.norm(points[nodes[:, 1]] - points[nodes[:, 0]], axis=1)
+    return float((length / model.element_rest_length.numpy()[limited]).max(initial=1.0))
 
 
 def _pair_gaps(points: np.ndarray, pairs: np.ndarray) -> np.ndarray:

@@ -39,7 +39,7 @@ SAVE_SECONDS = 10.0
 
 Saved = Callable[[str, int], None]
 """``on_save(stage, step)``, called after each save: ``stage`` a sewing stage's name
-(:class:`~party.garment.sewing.SewingStage`: "sewn", "closed", "settling"), "garment" once sewn,
+(:class:`~party.garment.sewing.SewingStage`: "sewn", "closed", "spreading", "settling"), "garment" once sewn,
 or "draping"; ``step`` the settling's rounds or the draping's steps (else 0)."""
 
 
@@ -92,7 +92,8 @@ class DrapeCheckpoint:
             str(saved["sewing_stage"]), saved["sewing_points"].astype(np.float64), float(saved["sewing_dt"]),
             _log(saved, "sewing"), _log(saved, "settling"), [int(n) for n in saved["overstretched"]],
             int(saved["rounds"]), saved["seam_gaps"] if saved["seam_gaps"].size else None,
-            [float(x) for x in saved.get("excess", ())])
+            [float(x) for x in saved.get("excess", ())],
+            saved["spread_points"].astype(np.float64) if saved.get("spread_points", np.empty(0)).size else None)
 
     def save_sewing(self, stage: SewingStage, wall_seconds: float) -> None:
         """Save the sewing as it stood after ``stage``, ``wall_seconds`` [s] into the drape."""
@@ -101,6 +102,7 @@ class DrapeCheckpoint:
                     overstretched=np.asarray(stage.overstretched, np.int64),
                     excess=np.asarray(stage.excess, np.float64), rounds=stage.rounds,
                     seam_gaps=np.asarray([] if stage.seam_gaps is None else stage.seam_gaps, np.float64),
+                    spread_points=np.asarray([] if stage.spread is None else stage.spread, np.float64),
                     wall_seconds=wall_seconds)
         self._said(stage.stage, stage.rounds)
 

@@ -25,9 +25,9 @@ from .registry import make_solver
 
 
 KINETIC_MOMENTUM = 0.9
-"""Velocity kept per iteration by the kinetic-damping relaxations (sewing's first stage, the
-explicit drape): at the explicit solver's small steps a sleeve falls 2 cm/s at most, so sleeves
-sewn out sideways stay out, as in the paper's figure 12."""
+"""Velocity kept per iteration by the sewing's kinetic-damping relaxation: at the explicit
+solver's small steps a sleeve falls 2 cm/s at most, so sleeves sewn out sideways stay out, as in
+the paper's figure 12 (the drape keeps more, :class:`party.garment.draping.KineticDrape`)."""
 
 
 def total_energy(model: Model, points: np.ndarray) -> float:
