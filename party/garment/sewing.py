@@ -332,24 +332,26 @@ def _panels_model(garment: Garment, fabric: Fabric, points: np.ndarray, body: Bo
     return builder.finalize(device)
 
 
-def _overstretched(model: Model, points: np.ndarray, beyond_rest: float) -> tuple[int, float]:
-    """How many of ``model``'s elements with a plastic limit ``points`` [m] stretch beyond
-    ``beyond_rest`` times their rest length, and their total length beyond their limits [m]."""
+def _stretch(model: Model, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each of ``model``'s elements with a plastic limit at ``points`` [m]: its length over
+    its rest length [-], and its length beyond its limit [m] (negative within it)."""
     limited = model.limited_elements
     nodes = model.element_nodes.numpy()[limited]
     length = np.linalg.norm(points[nodes[:, 1]] - points[nodes[:, 0]], axis=1)
-    beyond = length - model.element_max_length.numpy()[limited]
-    return (int((length > beyond_rest * model.element_rest_length.numpy()[limited]).sum()),
-            float(np.maximum(beyond, 0.0).sum()))
+    return length / model.element_rest_length.numpy()[limited], length - model.element_max_length.numpy()[limited]
+
+
+def _overstretched(model: Model, points: np.ndarray, beyond_rest: float) -> tuple[int, float]:
+    """How many of ``model``'s elements with a plastic limit ``points`` [m] stretch beyond
+    ``beyond_rest`` times their rest length, and their total length beyond their limits [m]."""
+    stretch, beyond = _stretch(model, points)
+    return int((stretch > beyond_rest).sum()), float(np.maximum(beyond, 0.0).sum())
 
 
 def _largest_stretch(model: Model, points: np.ndarray) -> float:
     """The largest length over rest length [-] of ``model``'s elements with a plastic limit at
     ``points`` [m]."""
-    limited = model.limited_elements
-    nodes = model.element_nodes.numpy()[limited]
-    length = np.linalg.norm(points[nodes[:, 1]] - points[nodes[:, 0]], axis=1)
-    return float((length / model.element_rest_length.numpy()[limited]).max(initial=1.0))
+    return float(_stretch(model, points)[0].max(initial=1.0))
 
 
 def _pair_gaps(points: np.ndarray, pairs: np.ndarray) -> np.ndarray:
